@@ -1,0 +1,32 @@
+#pragma once
+// A sampled input/output record: N samples of nu inputs and ny outputs on a uniform grid.
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+namespace idrig {
+
+struct IoRecord {
+  Eigen::VectorXd t;         // N sample times [s], uniform and increasing
+  Eigen::MatrixXd u;         // N×nu inputs
+  Eigen::MatrixXd y;         // N×ny outputs
+  double sample_time = 0.0;  // Ts [s]
+  std::vector<std::string> input_names, output_names;
+
+  int NumSamples() const { return static_cast<int>(u.rows()); }
+  int NumInputs() const { return static_cast<int>(u.cols()); }
+  int NumOutputs() const { return static_cast<int>(y.cols()); }
+};
+
+// Builds a record on t_k = k·Ts from input and output matrices (N×nu, N×ny).
+IoRecord MakeIoRecord(const Eigen::MatrixXd& u, const Eigen::MatrixXd& y, double sample_time);
+
+// Throws std::invalid_argument naming the first problem: mismatched lengths, NaN/Inf (with
+// row and column), a time column that is not increasing or not uniform, fewer than
+// `min_samples` samples.
+void ValidateIoRecord(const IoRecord& record, int min_samples = 2);
+
+// Samples [begin, end) as a new record (times kept).
+IoRecord Slice(const IoRecord& record, int begin, int end);
+
+}  // namespace idrig

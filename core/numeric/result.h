@@ -1,0 +1,25 @@
+#pragma once
+// Common fields of every identification result (DESIGN.md convention 1).
+#include <string>
+
+namespace idrig {
+
+enum class SolverStatus {
+  kOk,               // solved / converged
+  kIllConditioned,   // solved, but the problem is numerically ill-conditioned: read `message`
+  kNotConverged,     // iteration limit reached before the stopping rule was met
+  kFailed,           // no usable answer: read `message`
+};
+
+const char* ToString(SolverStatus status);
+
+struct ResultBase {
+  SolverStatus status = SolverStatus::kFailed;
+  std::string message;      // what happened, in words a user can act on
+  int iterations = 0;       // iterations of the method (1 for direct solves)
+  double final_cost = 0.0;  // the method's own cost at the solution
+  double fit_percent = 0.0; // simulation fit 100·(1 − NRMSE) on the estimation data
+  bool ok() const { return status == SolverStatus::kOk; }
+};
+
+}  // namespace idrig
