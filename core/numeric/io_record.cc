@@ -1,0 +1,73 @@
+#include "core/numeric/io_record.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace idrig {
+
+IoRecord MakeIoRecord(const Eigen::MatrixXd& u, const Eigen::MatrixXd& y, double sample_time) {
+  if (!(sample_time > 0.0)) throw std::invalid_argument("record: sample time must be positive");
+  IoRecord record;
+  record.u = u;
+  record.y = y;
+  record.sample_time = sample_time;
+  record.t = Eigen::VectorXd::LinSpaced(u.rows(), 0.0, sample_time * (u.rows() - 1));
+  for (int i = 0; i < u.cols(); ++i) record.input_names.push_back(u.cols() == 1 ? "u" : "u" + std::to_string(i + 1));
+  for (int i = 0; i < y.cols(); ++i) record.output_names.push_back(y.cols() == 1 ? "y" : "y" + std::to_string(i + 1));
+  return record;
+}
+
+void ValidateIoRecord(const IoRecord& record, int min_samples) {
+  const long n = record.u.rows();
+  if (record.y.rows() != n || record.t.size() != n)
+    throw std::invalid_argument("record: columns have different lengths (t " +
+                                std::to_string(record.t.size()) + ", u " + std::to_string(n) +
+                                ", y " + std::to_string(record.y.rows()) + ")");
+  if (record.u.cols() == 0) throw std::invalid_argument("record: no input column");
+  if (record.y.cols() == 0) throw std::invalid_argument("record: no output column");
+  if (n < min_samples)
+    throw std::invalid_argument("record: " + std::to_string(n) + " samples, at least " +
+                                std::to_string(min_samples) + " needed");
+  auto check_finite = [&](const Eigen::MatrixXd& m, const std::vector<std::string>& names,
+                          const char* kind) {
+    for (long r = 0; r < m.rows(); ++r)
+      for (long c = 0; c < m.cols(); ++c)
+        if (!std::isfinite(m(r, c)))
+          throw std::invalid_argument(
+              std::string("record: ") + (std::isnan(m(r, c)) ? "NaN" : "Inf") + " in " + kind +
+              " column '" + (c < static_cast<long>(names.size()) ? names[c] : std::to_string(c)) +
+              "' at sample " + std::to_string(r));
+  };
+  check_finite(record.t, {"t"}, "time");
+  check_finite(record.u, record.input_names, "input");
+  check_finite(record.y, record.output_names, "output");
+  if (n >= 2) {
+    const double ts = record.sample_time;
+    if (!(ts > 0.0)) throw std::invalid_argument("record: sample time must be positive");
+    for (long k = 1; k < n; ++k) {
+      const double dt = record.t(k) - record.t(k - 1);
+      if (!(dt > 0.0))
+        throw std::invalid_argument("record: time column is not increasing at sample " +
+                                    std::to_string(k) + " (t = " + std::to_string(record.t(k)) + ")");
+      if (std::abs(dt - ts) > 1e-3 * ts)
+        throw std::invalid_argument("record: time column is not uniform at sample " +
+                                    std::to_string(k) + " (step " + std::to_string(dt) +
+                                    " s, expected " + std::to_string(ts) + " s)");
+    }
+  }
+}
+
+IoRecord Slice(const IoRecord& record, int begin, int end) {
+  if (begin < 0 || end > record.NumSamples() || begin >= end)
+    throw std::invalid_argument("record slice [" + std::to_string(begin) + ", " +
+                                std::to_string(end) + ") is outside 0.." +
+                                std::to_string(record.NumSamples()));
+  IoRecord out = record;
+  out.t = record.t.segment(begin, end - begin);
+  out.u = record.u.middleRows(begin, end - begin);
+  out.y = record.y.middleRows(begin, end - begin);
+  return out;
+}
+
+}  // namespace idrig
