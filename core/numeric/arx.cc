@@ -141,36 +141,25 @@ TriangleSolve SolveFromTriangle(const Eigen::MatrixXd& triangle, long equations,
   return out;
 }
 
-// Instrumental variables (Ljung, System Identification, §7.6): instruments built from the
-// noise-free simulated output x̂ of the previous estimate; θ = (Σ ζ fᵀ)⁻¹ Σ ζ y.
-Eigen::VectorXd InstrumentalVariableStep(const Eigen::VectorXd& y, const Eigen::VectorXd& u,
-                                         const EquationPlan& plan, const Eigen::VectorXd& g,
-                                         double* condition) {
-  const int n = plan.order, p = 2 * n;
-  // Simulate x̂_k = Σ g_i x̂_{k−i} + Σ d_i u_{k−nk−i+1} from rest.
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(y.size());
-  for (long k = 0; k < y.size(); ++k) {
-    double v = 0.0;
-    for (int i = 0; i < n; ++i) {
-      if (k - 1 - i >= 0) v += g(i) * x(k - 1 - i);
-      if (k - plan.delay - i >= 0) v += g(n + i) * u(k - plan.delay - i);
-    }
-    x(k) = v;
+// Filters x through 1/A(q), A(q) = 1 + c_1 q⁻¹ + … + c_n q⁻ⁿ, from rest.
+Eigen::VectorXd FilterByInverseA(const Eigen::VectorXd& x, const Eigen::VectorXd& c) {
+  Eigen::VectorXd out(x.size());
+  for (long k = 0; k < x.size(); ++k) {
+    double v = x(k);
+    for (int i = 0; i < c.size() && k - 1 - i >= 0; ++i) v -= c(i) * out(k - 1 - i);
+    out(k) = v;
   }
-  Eigen::MatrixXd zf = Eigen::MatrixXd::Zero(p, p);
-  Eigen::VectorXd zy = Eigen::VectorXd::Zero(p);
-  Eigen::VectorXd f(p), zeta(p);
-  for (long i = 0; i < plan.count; ++i) {
-    const long k = plan.Index(i);
-    FillRow(y, u, plan, k, f);
-    FillRow(x, u, plan, k, zeta);
-    zf.noalias() += zeta * f.transpose();
-    zy += zeta * y(k);
-  }
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(zf, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  *condition = svd.singularValues()(p - 1) > 0 ? svd.singularValues()(0) / svd.singularValues()(p - 1)
-                                               : std::numeric_limits<double>::infinity();
-  return svd.solve(zy);
+  return out;
+}
+
+// Reflects the roots of A(z) outside the unit circle to 1/conj(z) so that 1/A is a stable filter.
+Eigen::VectorXd StabilisedDenominator(const Eigen::VectorXd& c) {
+  Eigen::VectorXd den(c.size() + 1);
+  den << 1.0, c;
+  Eigen::VectorXcd roots = PolynomialRoots(den);
+  for (int i = 0; i < roots.size(); ++i)
+    if (std::abs(roots(i)) >= 1.0) roots(i) = 1.0 / std::conj(roots(i));
+  return PolynomialFromRoots(roots).tail(c.size());
 }
 
 Eigen::VectorXd SimulateDifferenceEquation(const Eigen::VectorXd& u, const Eigen::VectorXd& c,
@@ -204,11 +193,18 @@ Eigen::VectorXd OneStepResiduals(const Eigen::VectorXd& y, const Eigen::VectorXd
   return e;
 }
 
+// Steiglitz–McBride iterations (Ljung, System Identification, 2nd ed., §10.4): refit on u, y
+// prefiltered by 1/Â(q); the fixed point is the output-error estimate, which is unbiased under
+// white output noise where equation-error ARX is not. Returns the number of fits made.
+int RefineOutputError(const Eigen::VectorXd& y, const Eigen::VectorXd& u, int order,
+                      const ArxOptions& options, Eigen::VectorXd* g);
+
 struct Fit {
   TriangleSolve solve;
   EquationPlan plan;
   Eigen::VectorXd c, d;
   double fit_percent = 0.0;
+  int iterations = 1;
 };
 
 Fit FitOrder(const Eigen::VectorXd& y, const Eigen::VectorXd& u, int order,
@@ -221,11 +217,28 @@ Fit FitOrder(const Eigen::VectorXd& y, const Eigen::VectorXd& u, int order,
          std::to_string(y.size()) + " samples, q = " + std::to_string(options.decimation) + ")");
   const Eigen::MatrixXd triangle = TriangleOfEquations(y, u, fit.plan);
   fit.solve = SolveFromTriangle(triangle, fit.plan.count, options.epsilon);
+  if (options.oe_iterations > 0) fit.iterations = RefineOutputError(y, u, order, options, &fit.solve.g);
   fit.c = -fit.solve.g.head(order);
   fit.d = fit.solve.g.tail(order);
   const Eigen::VectorXd sim = SimulateDifferenceEquation(u, fit.c, fit.d, options.input_delay);
   fit.fit_percent = FitPercent(y, sim)(0);
   return fit;
+}
+
+int RefineOutputError(const Eigen::VectorXd& y, const Eigen::VectorXd& u, int order,
+                      const ArxOptions& options, Eigen::VectorXd* g) {
+  int fits = 1;
+  for (int it = 0; it < options.oe_iterations; ++it) {
+    const Eigen::VectorXd c_now = StabilisedDenominator(-g->head(order));
+    const Eigen::VectorXd uf = FilterByInverseA(u, c_now), yf = FilterByInverseA(y, c_now);
+    const EquationPlan plan = PlanEquations(y.size(), order, options);
+    const TriangleSolve refit = SolveFromTriangle(TriangleOfEquations(yf, uf, plan), plan.count, options.epsilon);
+    const double change = (refit.g - *g).norm() / std::max(1e-300, g->norm());
+    *g = refit.g;
+    ++fits;
+    if (change < 1e-10) break;
+  }
+  return fits;
 }
 
 }  // namespace
@@ -286,11 +299,16 @@ ArxResult IdentifyArx(const IoRecord& record, const ArxOptions& options) {
   result.input_delay = options.input_delay;
   int order = options.order;
   if (order == 0) {
-    double best_mdl = std::numeric_limits<double>::infinity();
+    // Order by cross-validation: fit each n on the first two thirds, simulate the whole record
+    // from rest and score the last third; take the smallest n within 2 % of the best NRMSE.
+    // (MDL on equation errors is reported too, but over-fits when the noise is not ARX noise.)
+    const long split = 2 * static_cast<long>(y.size()) / 3;
+    const Eigen::VectorXd y_est = y.head(split), u_est = u.head(split);
+    double best_nrmse = std::numeric_limits<double>::infinity();
     for (int n = 1; n <= options.max_order; ++n) {
-      const EquationPlan plan = PlanEquations(y.size(), n, options);
+      const EquationPlan plan = PlanEquations(split, n, options);
       if (plan.count < 2 * n + 1) break;
-      const Fit fit = FitOrder(y, u, n, options);
+      const Fit fit = FitOrder(y_est, u_est, n, options);
       ArxOrderCandidate cand;
       cand.order = n;
       cand.equations = static_cast<int>(plan.count);
@@ -298,9 +316,16 @@ ArxResult IdentifyArx(const IoRecord& record, const ArxOptions& options) {
       const double per_eq = std::max(fit.solve.rss / plan.count, std::numeric_limits<double>::min());
       cand.mdl = plan.count * std::log(per_eq) + 2.0 * n * std::log(static_cast<double>(plan.count));
       cand.epsilon = fit.solve.epsilon;
-      cand.fit_percent = fit.fit_percent;
+      const Eigen::VectorXd sim = SimulateDifferenceEquation(u, fit.c, fit.d, options.input_delay);
+      const long tail = y.size() - split;
+      cand.validation_nrmse = Nrmse(y.tail(tail), sim.tail(tail))(0);
+      cand.fit_percent = 100.0 * (1.0 - cand.validation_nrmse);
+      if (!std::isfinite(cand.validation_nrmse)) cand.validation_nrmse = std::numeric_limits<double>::infinity();
+      best_nrmse = std::min(best_nrmse, cand.validation_nrmse);
       result.order_table.push_back(cand);
-      if (cand.mdl < best_mdl) { best_mdl = cand.mdl; order = n; }
+    }
+    for (const auto& cand : result.order_table) {
+      if (cand.validation_nrmse <= 1.02 * best_nrmse + 1e-9) { order = cand.order; break; }
     }
     if (order == 0) Fail("the record is too short for any order (" + std::to_string(y.size()) + " samples)");
   }
@@ -311,27 +336,16 @@ ArxResult IdentifyArx(const IoRecord& record, const ArxOptions& options) {
   result.epsilon_rule = options.epsilon < 0.0 ? "gcv" : "user";
   result.condition_number = fit.solve.condition_number;
   result.g = fit.solve.g;
-  result.iterations = 1;
+  result.iterations = fit.iterations;
   const double dof = std::max(1.0, fit.plan.count - fit.solve.effective_parameters);
   result.noise_variance = fit.solve.rss / dof;
   result.covariance = result.noise_variance * fit.solve.unscaled_covariance;
   result.final_cost = fit.solve.rss;
-  for (int it = 0; it < options.iv_iterations; ++it) {
-    double cond = 0.0;
-    const Eigen::VectorXd g_iv = InstrumentalVariableStep(y, u, fit.plan, result.g, &cond);
-    if (!g_iv.allFinite()) {
-      result.warnings.push_back("instrumental-variable step " + std::to_string(it + 1) +
-                                " failed (singular instrument matrix); kept the previous estimate");
-      break;
-    }
-    result.g = g_iv;
-    result.iterations = it + 2;
-  }
   result.c = -result.g.head(order);
   result.d = result.g.tail(order);
   result.g_std = result.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
-  if (options.iv_iterations > 0)
-    result.warnings.push_back("covariance is the least-squares one (before the IV refinement)");
+  if (options.oe_iterations > 0)
+    result.warnings.push_back("covariance is that of the first least-squares fit (before the output-error refinement)");
 
   // Steps 2–3: Rd1 by (1.12)–(1.13) and W(z) by (1.14).
   Eigen::VectorXd den_z(order + 1);
@@ -358,11 +372,11 @@ ArxResult IdentifyArx(const IoRecord& record, const ArxOptions& options) {
   rto.max_lag = std::min<int>(rto.max_lag, std::max<int>(1, static_cast<int>(e.size()) / 4));
   if (e.size() > rto.max_lag + 2) {
     result.residuals = TestResiduals(e, u_aligned, rto);
-    if (!result.residuals.white && options.iv_iterations == 0)
+    if (!result.residuals.white && options.oe_iterations == 0)
       result.warnings.push_back(
           "one-step residuals are not white: the noise is not the equation error ARX assumes "
           "(e.g. output measurement noise), so these least-squares estimates are biased; "
-          "try the instrumental-variable refinement (method arx-iv)");
+          "try the output-error refinement (method arx-oe)");
   }
 
   result.status = SolverStatus::kOk;

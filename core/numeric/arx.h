@@ -25,16 +25,16 @@
 namespace idrig {
 
 struct ArxOptions {
-  int order = 0;            // n; 0 chooses n in [1, max_order] by minimum MDL
+  int order = 0;            // n; 0 chooses n in [1, max_order] by cross-validation
   int max_order = 8;
   int input_delay = 1;      // nk >= 1 samples (the continuous model gets delay (nk − 1)·T)
   int decimation = 1;       // q of Eq. (2.10): one equation every q samples
   int first_equation = -1;  // index k of the first predicted sample y_k; −1: the first possible
   int max_equations = 0;    // L; 0: as many as the record allows
   double epsilon = -1.0;    // ε of Eq. (2.11); < 0: chosen by GCV
-  // Instrumental-variable refinement (Ljung's IV with instruments simulated from the previous
-  // estimate): removes the bias of equation-error ARX under output noise. 0: plain ARX.
-  int iv_iterations = 0;
+  // Output-error refinement by Steiglitz–McBride iterations (refit on data prefiltered by
+  // 1/Â(q)): removes the bias of equation-error ARX under output noise. 0: plain ARX.
+  int oe_iterations = 0;
   bool recover_continuous = true;
   int log_series_terms = 0;  // terms of (1.16); 0: sum to machine precision
   ResidualTestOptions residual_test;
@@ -46,7 +46,8 @@ struct ArxOrderCandidate {
   double residual_sum_squares = 0.0;
   double mdl = 0.0;          // L·ln(RSS/L) + 2n·ln(L)
   double epsilon = 0.0;
-  double fit_percent = 0.0;  // simulation fit on the record
+  double validation_nrmse = 0.0;  // simulation NRMSE on the held-out last third
+  double fit_percent = 0.0;       // 100·(1 − validation_nrmse)
 };
 
 struct ArxResult : ResultBase {
