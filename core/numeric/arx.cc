@@ -366,7 +366,10 @@ ArxResult IdentifyArx(const IoRecord& record, const ArxOptions& options) {
   // Validation on the record: simulation fit and one-step residuals.
   const Eigen::VectorXd sim = SimulateDifferenceEquation(u, result.c, result.d, options.input_delay);
   result.fit_percent = FitPercent(y, sim)(0);
-  const Eigen::VectorXd e = OneStepResiduals(y, u, fit.plan, result.g);
+  // Residuals: one-step prediction errors for ARX; simulation errors for the output-error fit,
+  // whose noise model is white output noise.
+  const Eigen::VectorXd e = options.oe_iterations > 0 ? Eigen::VectorXd(y - sim)
+                                                      : OneStepResiduals(y, u, fit.plan, result.g);
   const Eigen::VectorXd u_aligned = u.tail(e.size());
   ResidualTestOptions rto = options.residual_test;
   rto.max_lag = std::min<int>(rto.max_lag, std::max<int>(1, static_cast<int>(e.size()) / 4));

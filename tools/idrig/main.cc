@@ -1,1 +1,28 @@
-int main(){return 0;}
+// idrig: measurement and identification of dynamic systems on test rigs.
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+#include <stdexcept>
+
+#include "tools/idrig/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"idrig - identify dynamic systems on test rigs (version " IDRIG_VERSION ")"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", IDRIG_VERSION);
+  idrig::RegisterIdentifyCommand(app);
+  idrig::RegisterExampleCommand(app);
+  idrig::RegisterSimulateCommand(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "idrig: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "idrig: failed: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,78 @@
+#include "core/methods/registry.h"
+
+#include <stdexcept>
+
+#include "core/io/csv.h"
+
+namespace idrig {
+
+// One line per method family; each adapter lives in its own file here.
+std::vector<MethodInfo> ArxMethods();
+
+const std::vector<MethodInfo>& Methods() {
+  static const std::vector<MethodInfo> methods = [] {
+    std::vector<MethodInfo> all;
+    for (auto family : {ArxMethods}) {
+      auto some = family();
+      all.insert(all.end(), some.begin(), some.end());
+    }
+    return all;
+  }();
+  return methods;
+}
+
+const MethodInfo& FindMethod(const std::string& name) {
+  for (const auto& m : Methods())
+    if (m.name == name) return m;
+  std::string known;
+  for (const auto& m : Methods()) known += (known.empty() ? "" : ", ") + m.name;
+  throw std::invalid_argument("unknown method '" + name + "'; known methods: " + known);
+}
+
+namespace {
+MethodReport Finish(const MethodInfo& info, MethodReport report) {
+  report.json["method"] = info.name;
+  return report;
+}
+}  // namespace
+
+MethodReport RunMethod(const std::string& name, const std::string& data_path,
+                       const nlohmann::json& options) {
+  const MethodInfo& info = FindMethod(name);
+  MethodInput input;
+  input.path = data_path;
+  IoRecord record;
+  if (info.needs_record) {
+    record = ReadIoRecordCsv(data_path);
+    input.record = &record;
+  }
+  return Finish(info, info.run(input, options));
+}
+
+MethodReport RunMethod(const std::string& name, const IoRecord& record,
+                       const nlohmann::json& options) {
+  const MethodInfo& info = FindMethod(name);
+  if (!info.needs_record)
+    throw std::invalid_argument("method '" + name + "' reads its data from a file, not a time record");
+  ValidateIoRecord(record);
+  MethodInput input;
+  input.record = &record;
+  return Finish(info, info.run(input, options));
+}
+
+void CheckOptionKeys(const nlohmann::json& options, const std::vector<std::string>& known,
+                     const std::string& method) {
+  if (options.is_null()) return;
+  if (!options.is_object()) throw std::invalid_argument(method + ": options must be a JSON object");
+  for (auto it = options.begin(); it != options.end(); ++it) {
+    bool found = false;
+    for (const auto& k : known) found |= (k == it.key());
+    if (!found) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      throw std::invalid_argument(method + ": unknown option '" + it.key() + "' (known: " + list + ")");
+    }
+  }
+}
+
+}  // namespace idrig

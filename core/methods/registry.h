@@ -1,0 +1,50 @@
+#pragma once
+// Identification methods by name, for the command line and the workers: a new method is one
+// adapter file in core/methods/ plus one line in registry.cc, and every front end picks it up.
+//
+// A runner gets the data (a time record, or the path of a file it reads itself, e.g. an FRF)
+// and its options as JSON, and returns a report:
+//   {"method": name, "model": <idrig.model/1>, "fit_percent": …, "status": …, "message": …,
+//    "details": {…method specific…}}
+// plus a human-readable text. Runners throw std::invalid_argument for bad data or options.
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/numeric/io_record.h"
+
+namespace idrig {
+
+struct MethodInput {
+  const IoRecord* record = nullptr;  // time-domain record, when the data is one
+  std::string path;                  // the data file as given by the user
+};
+
+struct MethodReport {
+  nlohmann::json json;
+  std::string text;
+};
+
+struct MethodInfo {
+  std::string name;
+  std::string summary;
+  bool needs_record = true;  // false: the runner reads `path` itself (e.g. FRF files)
+  std::function<MethodReport(const MethodInput&, const nlohmann::json& options)> run;
+};
+
+const std::vector<MethodInfo>& Methods();
+// Throws std::invalid_argument listing the known methods when `name` is unknown.
+const MethodInfo& FindMethod(const std::string& name);
+// Reads the record when the method needs one, runs it, adds "method" to the report.
+MethodReport RunMethod(const std::string& name, const std::string& data_path,
+                       const nlohmann::json& options);
+MethodReport RunMethod(const std::string& name, const IoRecord& record,
+                       const nlohmann::json& options);
+
+// Option helpers shared by adapters: typed lookup with a default, and a check that every
+// given key is known (a misspelt option is an error, not silently ignored).
+void CheckOptionKeys(const nlohmann::json& options, const std::vector<std::string>& known,
+                     const std::string& method);
+
+}  // namespace idrig

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Each bad input gives exit code 2 and a message naming the problem.
+set -uo pipefail
+idrig=$1
+dir=$(mktemp -d); trap 'rm -rf "$dir"' EXIT
+status=0
+expect() {  # expect "fragment" command...
+  local fragment=$1; shift
+  local out rc
+  out=$("$@" 2>&1); rc=$?
+  if [ $rc -ne 2 ] || ! grep -qF -- "$fragment" <<<"$out"; then
+    echo "FAIL ($rc): $* -> $out (expected '$fragment')"; status=1
+  else
+    echo "ok: $fragment"
+  fi
+}
+printf 't,u,y\n0,1,0\n0.1,nan,0\n0.2,1,0\n' > "$dir/nan.csv"
+printf 't,u,y\n0,1,0\n0.1,1,0\n0.1,1,0\n' > "$dir/time.csv"
+printf 't,x,y\n0,1,0\n0.1,1,0\n' > "$dir/cols.csv"
+printf 't,u,y\n0,1,0\n0.1,1,0\n0.2,2' > "$dir/trunc.csv"
+: > "$dir/empty.csv"
+"$idrig" example --out "$dir/short.csv" --samples 10 --noise 0
+awk -F, 'NR == 1 { print; next } { print $1 ",1," $3 }' "$dir/short.csv" > "$dir/const.csv"
+expect "NaN in input column 'u' at sample 1" "$idrig" identify --data "$dir/nan.csv"
+expect "not increasing at sample 2" "$idrig" identify --data "$dir/time.csv"
+expect "column 'x'" "$idrig" identify --data "$dir/cols.csv"
+expect "line 4 has 2 fields" "$idrig" identify --data "$dir/trunc.csv"
+expect "empty file" "$idrig" identify --data "$dir/empty.csv"
+expect "cannot open" "$idrig" identify --data "$dir/none.csv"
+expect "persistently exciting" "$idrig" identify --data "$dir/const.csv" --order 2
+expect "equations" "$idrig" identify --data "$dir/short.csv" --order 5
+expect "unknown method 'nope'" "$idrig" identify --data "$dir/short.csv" --method nope
+expect "unknown option 'ordr'" "$idrig" identify --data "$dir/short.csv" --option ordr=3
+echo '{"format":"idrig.model/1","kind":"tf"' > "$dir/bad.json"
+expect "not valid JSON" "$idrig" simulate --model "$dir/bad.json" --data "$dir/short.csv"
+exit $status

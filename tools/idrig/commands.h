@@ -1,0 +1,9 @@
+#pragma once
+// Each command group of `idrig` registers its subcommands on the top-level app.
+#include <CLI/CLI.hpp>
+
+namespace idrig {
+void RegisterIdentifyCommand(CLI::App& app);
+void RegisterExampleCommand(CLI::App& app);
+void RegisterSimulateCommand(CLI::App& app);
+}  // namespace idrig
