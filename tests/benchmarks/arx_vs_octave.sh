@@ -10,7 +10,8 @@ echo "idrig arx (order 3, ε by GCV, all five forms), 5 runs:"
 for i in 1 2 3 4 5; do
   /usr/bin/time -f "  %e s wall, %M kB peak RSS" "$build/bin/idrig" identify --data "$dir/rec.csv" --method arx --order 3 > /dev/null
 done
-echo "  (wall time includes reading the 200k-line CSV; the solver alone: build/bin/arx_benchmark)"
+echo "  (wall time includes reading the 200k-line CSV text; the solver alone on the same plant and N:)"
+"$build/bin/arx_benchmark" --benchmark_filter='N:200000/order:3/' --benchmark_counters_tabular=true 2>/dev/null | grep BM_
 cat > "$dir/run.m" <<OCT
 pkg load control
 d = dlmread('$dir/rec.csv', ',', 1, 0);
