@@ -54,6 +54,17 @@ void Figure8System(const Figure7Data& data, Eigen::MatrixXd* F, Eigen::VectorXd*
   }
 }
 
+// Fig. 8's plan: first equation k = 4, q = 3, L = 9, ε = 0.6e−10.
+ArxOptions Figure8Options() {
+  ArxOptions options;
+  options.order = 3;
+  options.first_equation = 4;
+  options.decimation = 3;
+  options.max_equations = 9;
+  options.epsilon = 0.6e-10;
+  return options;
+}
+
 TEST(ArxFigure8, IllConditionedSystemNeedsEpsilon) {
   const Figure7Data data = MakeFigure7();
   // Exact column of PAPER_NUMBERS.md (all 29 equations, q = 1), to its printed 4 decimals.
@@ -80,12 +91,7 @@ TEST(ArxFigure8, IllConditionedSystemNeedsEpsilon) {
   std::printf("Fig. 8: without epsilon status %s, max |g - g_true| = %.3g\n", ToString(without.status), error_without);
   EXPECT_TRUE(without.status != SolverStatus::kOk || error_without > 1e-2);
   // IdentifyArx with the same plan (first equation k = 4, q = 3, L = 9) and ε reproduces it.
-  ArxOptions options;
-  options.order = 3;
-  options.first_equation = 4;
-  options.decimation = 3;
-  options.max_equations = 9;
-  options.epsilon = 0.6e-10;
+  ArxOptions options = Figure8Options();
   const ArxResult arx = IdentifyArx(MakeIoRecord(data.u, data.y, 0.4), options);
   EXPECT_EQ(arx.equations, 9);
   EXPECT_LT((arx.g - printed).cwiseAbs().maxCoeff(), 1.5e-3);
@@ -93,12 +99,7 @@ TEST(ArxFigure8, IllConditionedSystemNeedsEpsilon) {
 
 TEST(ArxFigure9, ContinuousModelAndSteadyState) {
   const Figure7Data data = MakeFigure7();
-  ArxOptions options;
-  options.order = 3;
-  options.first_equation = 4;
-  options.decimation = 3;
-  options.max_equations = 9;
-  options.epsilon = 0.6e-10;
+  ArxOptions options = Figure8Options();
   options.log_series_terms = 11;  // Fig. 9 sums k = 0..10
   const ArxResult arx = IdentifyArx(MakeIoRecord(data.u, data.y, 0.4), options);
   // y(∞) = 0.6667 by (2.4) (and by (1.15)); the data came from the 8-term series, so 1e-3.
