@@ -149,7 +149,9 @@ TEST(ExcitationTest, PrbsTapTableIsPrimitive) {
       EXPECT_NE(PowMod(order / q, p, bits), 1u) << "prime factor " << q;
       while (rest % q == 0) rest /= q;
     }
-    if (rest > 1) EXPECT_NE(PowMod(order / rest, p, bits), 1u) << "prime factor " << rest;
+    if (rest > 1) {
+      EXPECT_NE(PowMod(order / rest, p, bits), 1u) << "prime factor " << rest;
+    }
   }
 }
 
