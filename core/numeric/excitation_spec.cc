@@ -96,11 +96,28 @@ std::string Join(const std::set<std::string>& keys) {
   return out;
 }
 
+// Shortest of 15 or 17 significant digits that reads back to the same double.
 std::string Num(double value) {
-  std::ostringstream out;
-  out.precision(17);
-  out << value;
-  return out.str();
+  for (int digits : {15, 17}) {
+    std::ostringstream out;
+    out.precision(digits);
+    out << value;
+    if (digits == 17 || std::stod(out.str()) == value) return out.str();
+  }
+  return "";
+}
+
+// Harmonic numbers as ranges: 1;2;3;5 -> 1-3;5.
+std::string FormatLines(const std::vector<int>& lines) {
+  std::string out;
+  for (size_t i = 0; i < lines.size();) {
+    size_t j = i;
+    while (j + 1 < lines.size() && lines[j + 1] == lines[j] + 1) ++j;
+    out += (out.empty() ? "" : ";") + std::to_string(lines[i]);
+    if (j > i) out += "-" + std::to_string(lines[j]);
+    i = j + 1;
+  }
+  return out;
 }
 
 }  // namespace
@@ -236,7 +253,7 @@ std::string FormatExcitationSpec(const ExcitationSpec& spec) {
       break;
     case ExcitationKind::kMultisine: {
       out += ",f0=" + Num(spec.base_frequency_hz);
-      if (!spec.lines.empty()) out += ",lines=" + list(spec.lines);
+      if (!spec.lines.empty()) out += ",lines=" + FormatLines(spec.lines);
       static const char* kSets[] = {"all", "odd", "oddodd"};
       static const char* kPhases[] = {"zero", "schroeder", "random"};
       out += std::string(",set=") + kSets[static_cast<int>(spec.line_set)];
