@@ -6,4 +6,5 @@ namespace idrig {
 void RegisterIdentifyCommand(CLI::App& app);
 void RegisterExampleCommand(CLI::App& app);
 void RegisterSimulateCommand(CLI::App& app);
+void RegisterExciteCommand(CLI::App& app);  // cmd_excite.cc
 }  // namespace idrig
