@@ -11,6 +11,8 @@ namespace {
 
 [[noreturn]] void Fail(const std::string& what) { throw std::invalid_argument("arx: " + what); }
 
+using ConstVec = Eigen::Ref<const Eigen::VectorXd>;
+
 // Equation layout of (2.9)–(2.10): predicted samples k = k0, k0 + q, …, at most L of them.
 struct EquationPlan {
   int order = 0, delay = 1, q = 1;
@@ -35,7 +37,7 @@ EquationPlan PlanEquations(long samples, int order, const ArxOptions& options) {
 
 // Row f_{k−1} of (2.8): (y_{k−1} … y_{k−n} | u_{k−nk} … u_{k−nk−n+1}).
 template <typename Row>
-void FillRow(const Eigen::VectorXd& y, const Eigen::VectorXd& u, const EquationPlan& plan, long k,
+void FillRow(ConstVec y, ConstVec u, const EquationPlan& plan, long k,
              Row&& row) {
   const int n = plan.order;
   for (int i = 0; i < n; ++i) row(i) = y(k - 1 - i);
@@ -43,7 +45,7 @@ void FillRow(const Eigen::VectorXd& y, const Eigen::VectorXd& u, const EquationP
 }
 
 // QR in blocks of [F_L Y_L]: returns the (p+1)×(p+1) upper triangle R with RᵀR = [F Y]ᵀ[F Y].
-Eigen::MatrixXd TriangleOfEquations(const Eigen::VectorXd& y, const Eigen::VectorXd& u,
+Eigen::MatrixXd TriangleOfEquations(ConstVec y, ConstVec u,
                                     const EquationPlan& plan) {
   const int p = 2 * plan.order;
   constexpr long kBlockRows = 1024;
@@ -142,7 +144,7 @@ TriangleSolve SolveFromTriangle(const Eigen::MatrixXd& triangle, long equations,
 }
 
 // Filters x through 1/A(q), A(q) = 1 + c_1 q⁻¹ + … + c_n q⁻ⁿ, from rest.
-Eigen::VectorXd FilterByInverseA(const Eigen::VectorXd& x, const Eigen::VectorXd& c) {
+Eigen::VectorXd FilterByInverseA(ConstVec x, const Eigen::VectorXd& c) {
   Eigen::VectorXd out(x.size());
   for (long k = 0; k < x.size(); ++k) {
     double v = x(k);
@@ -162,7 +164,7 @@ Eigen::VectorXd StabilisedDenominator(const Eigen::VectorXd& c) {
   return PolynomialFromRoots(roots).tail(c.size());
 }
 
-Eigen::VectorXd SimulateDifferenceEquation(const Eigen::VectorXd& u, const Eigen::VectorXd& c,
+Eigen::VectorXd SimulateDifferenceEquation(ConstVec u, const Eigen::VectorXd& c,
                                            const Eigen::VectorXd& d, int delay) {
   const int n = static_cast<int>(c.size());
   Eigen::VectorXd y = Eigen::VectorXd::Zero(u.size());
@@ -177,7 +179,7 @@ Eigen::VectorXd SimulateDifferenceEquation(const Eigen::VectorXd& u, const Eigen
   return y;
 }
 
-Eigen::VectorXd OneStepResiduals(const Eigen::VectorXd& y, const Eigen::VectorXd& u,
+Eigen::VectorXd OneStepResiduals(ConstVec y, ConstVec u,
                                  const EquationPlan& plan, const Eigen::VectorXd& g) {
   EquationPlan all = plan;
   all.q = 1;
@@ -196,18 +198,17 @@ Eigen::VectorXd OneStepResiduals(const Eigen::VectorXd& y, const Eigen::VectorXd
 // Steiglitz–McBride iterations (Ljung, System Identification, 2nd ed., §10.4): refit on u, y
 // prefiltered by 1/Â(q); the fixed point is the output-error estimate, which is unbiased under
 // white output noise where equation-error ARX is not. Returns the number of fits made.
-int RefineOutputError(const Eigen::VectorXd& y, const Eigen::VectorXd& u, int order,
+int RefineOutputError(ConstVec y, ConstVec u, int order,
                       const ArxOptions& options, Eigen::VectorXd* g);
 
 struct Fit {
   TriangleSolve solve;
   EquationPlan plan;
   Eigen::VectorXd c, d;
-  double fit_percent = 0.0;
   int iterations = 1;
 };
 
-Fit FitOrder(const Eigen::VectorXd& y, const Eigen::VectorXd& u, int order,
+Fit FitOrder(ConstVec y, ConstVec u, int order,
              const ArxOptions& options) {
   Fit fit;
   fit.plan = PlanEquations(y.size(), order, options);
@@ -220,12 +221,10 @@ Fit FitOrder(const Eigen::VectorXd& y, const Eigen::VectorXd& u, int order,
   if (options.oe_iterations > 0) fit.iterations = RefineOutputError(y, u, order, options, &fit.solve.g);
   fit.c = -fit.solve.g.head(order);
   fit.d = fit.solve.g.tail(order);
-  const Eigen::VectorXd sim = SimulateDifferenceEquation(u, fit.c, fit.d, options.input_delay);
-  fit.fit_percent = FitPercent(y, sim)(0);
   return fit;
 }
 
-int RefineOutputError(const Eigen::VectorXd& y, const Eigen::VectorXd& u, int order,
+int RefineOutputError(ConstVec y, ConstVec u, int order,
                       const ArxOptions& options, Eigen::VectorXd* g) {
   int fits = 1;
   for (int it = 0; it < options.oe_iterations; ++it) {
@@ -286,8 +285,8 @@ ArxResult IdentifyArx(const IoRecord& record, const ArxOptions& options) {
   if (options.decimation < 1) Fail("decimation q must be >= 1");
   if (options.input_delay < 1) Fail("input delay nk must be >= 1 sample");
   if (!std::isfinite(options.epsilon)) Fail("epsilon must be a finite number (or negative for GCV)");
-  const Eigen::VectorXd y = record.y.col(0);
-  const Eigen::VectorXd u = record.u.col(0);
+  const ConstVec y = record.y.col(0);
+  const ConstVec u = record.u.col(0);
   const double u_spread = u.maxCoeff() - u.minCoeff();
   if (!(u_spread > 1e-12 * std::max(1.0, u.cwiseAbs().maxCoeff())))
     Fail("the input is constant (" + std::to_string(u(0)) +
@@ -363,23 +362,25 @@ ArxResult IdentifyArx(const IoRecord& record, const ArxOptions& options) {
     result.y_inf_matrix = (result.discrete_compact.H * e_minus_phi.fullPivLu().solve(result.discrete_compact.B))(0);
   }
 
-  // Validation on the record: simulation fit and one-step residuals.
-  const Eigen::VectorXd sim = SimulateDifferenceEquation(u, result.c, result.d, options.input_delay);
-  result.fit_percent = FitPercent(y, sim)(0);
-  // Residuals: one-step prediction errors for ARX; simulation errors for the output-error fit,
-  // whose noise model is white output noise.
-  const Eigen::VectorXd e = options.oe_iterations > 0 ? Eigen::VectorXd(y - sim)
-                                                      : OneStepResiduals(y, u, fit.plan, result.g);
-  const Eigen::VectorXd u_aligned = u.tail(e.size());
-  ResidualTestOptions rto = options.residual_test;
-  rto.max_lag = std::min<int>(rto.max_lag, std::max<int>(1, static_cast<int>(e.size()) / 4));
-  if (e.size() > rto.max_lag + 2) {
-    result.residuals = TestResiduals(e, u_aligned, rto);
-    if (!result.residuals.white && options.oe_iterations == 0)
-      result.warnings.push_back(
-          "one-step residuals are not white: the noise is not the equation error ARX assumes "
-          "(e.g. output measurement noise), so these least-squares estimates are biased; "
-          "try the output-error refinement (method arx-oe)");
+  if (options.validate) {
+    // Validation on the record: simulation fit and one-step residuals.
+    const Eigen::VectorXd sim = SimulateDifferenceEquation(u, result.c, result.d, options.input_delay);
+    result.fit_percent = FitPercent(y, sim)(0);
+    // Residuals: one-step prediction errors for ARX; simulation errors for the output-error fit,
+    // whose noise model is white output noise.
+    const Eigen::VectorXd e = options.oe_iterations > 0 ? Eigen::VectorXd(y - sim)
+                                                        : OneStepResiduals(y, u, fit.plan, result.g);
+    const Eigen::VectorXd u_aligned = u.tail(e.size());
+    ResidualTestOptions rto = options.residual_test;
+    rto.max_lag = std::min<int>(rto.max_lag, std::max<int>(1, static_cast<int>(e.size()) / 4));
+    if (e.size() > rto.max_lag + 2) {
+      result.residuals = TestResiduals(e, u_aligned, rto);
+      if (!result.residuals.white && options.oe_iterations == 0)
+        result.warnings.push_back(
+            "one-step residuals are not white: the noise is not the equation error ARX assumes "
+            "(e.g. output measurement noise), so these least-squares estimates are biased; "
+            "try the output-error refinement (method arx-oe)");
+    }
   }
 
   result.status = SolverStatus::kOk;

@@ -37,6 +37,8 @@ struct ArxOptions {
   int oe_iterations = 0;
   bool recover_continuous = true;
   int log_series_terms = 0;  // terms of (1.16); 0: sum to machine precision
+  // Simulation fit and residual tests on the record (skip for raw estimation speed).
+  bool validate = true;
   ResidualTestOptions residual_test;
 };
 

@@ -70,7 +70,7 @@ PartialFractions Residues(const TransferFunction& tf, double distinct_tol = 1e-8
 // Frequency response at ω [rad/s]; s = jω or z = e^(jωTs), times e^(−jωτ).
 std::complex<double> FrequencyResponse(const TransferFunction& tf, double omega);
 Eigen::MatrixXcd FrequencyResponse(const StateSpace& ss, double omega);
-// ny·nu × len(omega): column k holds H(jω_k) stacked column-major.
+// W at each ω_k of `omega` [rad/s].
 Eigen::VectorXcd FrequencyResponse(const TransferFunction& tf, const Eigen::VectorXd& omega);
 
 // Steady-state gain (W(0) or W(z=1)); +inf when the model has an integrator.

@@ -19,7 +19,7 @@ printf 't,u,y\n0,1,0\n0.1,1,0\n0.1,1,0\n' > "$dir/time.csv"
 printf 't,x,y\n0,1,0\n0.1,1,0\n' > "$dir/cols.csv"
 printf 't,u,y\n0,1,0\n0.1,1,0\n0.2,2' > "$dir/trunc.csv"
 : > "$dir/empty.csv"
-"$idrig" example --out "$dir/short.csv" --samples 10 --noise 0
+"$idrig" example --out "$dir/short.csv" --samples 30 --noise 0
 awk -F, 'NR == 1 { print; next } { print $1 ",1," $3 }' "$dir/short.csv" > "$dir/const.csv"
 expect "NaN in input column 'u' at sample 1" "$idrig" identify --data "$dir/nan.csv"
 expect "not increasing at sample 2" "$idrig" identify --data "$dir/time.csv"
@@ -28,7 +28,7 @@ expect "line 4 has 2 fields" "$idrig" identify --data "$dir/trunc.csv"
 expect "empty file" "$idrig" identify --data "$dir/empty.csv"
 expect "cannot open" "$idrig" identify --data "$dir/none.csv"
 expect "persistently exciting" "$idrig" identify --data "$dir/const.csv" --order 2
-expect "equations" "$idrig" identify --data "$dir/short.csv" --order 5
+expect "equations" "$idrig" identify --data "$dir/short.csv" --order 15
 expect "unknown method 'nope'" "$idrig" identify --data "$dir/short.csv" --method nope
 expect "unknown option 'ordr'" "$idrig" identify --data "$dir/short.csv" --option ordr=3
 echo '{"format":"idrig.model/1","kind":"tf"' > "$dir/bad.json"

@@ -6,6 +6,7 @@
 
 #include "core/io/csv.h"
 #include "core/io/model_json.h"
+#include "core/numeric/excitation.h"
 #include "tools/idrig/commands.h"
 
 namespace idrig {
@@ -20,7 +21,7 @@ void RegisterExampleCommand(CLI::App& app) {
   auto args = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
       "example", "write a record of seed 001's plant W(p) = (0.5p + 1)/(p^3 + 2.5p^2 + 4p + 1.5) "
-                 "under a +-1 random binary input, with white output noise");
+                 "under a +-1 maximum-length PRBS, with white output noise");
   cmd->add_option("--out", args->out, "CSV file to write (t,u,y)");
   cmd->add_option("--model-out", args->model_out, "also write the true plant as idrig.model/1 JSON");
   cmd->add_option("--samples", args->samples, "number of samples")->check(CLI::Range(10, 100000000));
@@ -31,10 +32,11 @@ void RegisterExampleCommand(CLI::App& app) {
     TransferFunction plant;
     plant.num = Eigen::Vector2d(0.5, 1.0);
     plant.den = Eigen::Vector4d(1.0, 2.5, 4.0, 1.5);
+    // ±1 maximum-length PRBS clocked at Ts (11-bit register: period 2047 samples).
+    const ExcitationSpec spec = ParseExcitationSpec("prbs:bits=11,amp=1");
+    const double fs = 1.0 / args->sample_time;
+    Eigen::MatrixXd u = GenerateExcitation(spec, fs, args->samples);
     std::mt19937_64 rng(args->seed);
-    std::bernoulli_distribution coin(0.5);
-    Eigen::MatrixXd u(args->samples, 1);
-    for (int k = 0; k < args->samples; ++k) u(k, 0) = coin(rng) ? 1.0 : -1.0;
     Eigen::MatrixXd y = Simulate(plant, u, args->sample_time);
     std::normal_distribution<double> noise(0.0, args->noise > 0 ? args->noise : 1.0);
     if (args->noise > 0)

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   idrig::RegisterIdentifyCommand(app);
   idrig::RegisterExampleCommand(app);
   idrig::RegisterSimulateCommand(app);
+  idrig::RegisterExciteCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

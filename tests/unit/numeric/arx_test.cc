@@ -8,22 +8,15 @@
 
 #include "core/numeric/realisation.h"
 
+#include "tests/unit/numeric/seed001_plant.h"
+
 namespace idrig {
 namespace {
 
-Eigen::MatrixXd PlantA() {
-  Eigen::MatrixXd a(3, 3);
-  a << 0, 1, 0, 0, 0, 1, -1.5, -4.0, -2.5;
-  return a;
-}
-Eigen::VectorXd PlantB() { return Eigen::Vector3d(0, 0.5, -0.25); }
-Eigen::RowVectorXd PlantH() { return Eigen::RowVector3d(1, 0, 0); }
-TransferFunction PlantTf() {
-  TransferFunction tf;
-  tf.num = Eigen::Vector2d(0.5, 1.0);
-  tf.den = Eigen::Vector4d(1.0, 2.5, 4.0, 1.5);
-  return tf;
-}
+using testing::PlantA;
+using testing::PlantB;
+using testing::PlantH;
+using testing::PlantTf;
 
 // Fig. 7: the exponential input u = 1 − e^(−t) through the difference form Rd1 at T = 0.4.
 struct Figure7Data {
@@ -61,6 +54,17 @@ void Figure8System(const Figure7Data& data, Eigen::MatrixXd* F, Eigen::VectorXd*
   }
 }
 
+// Fig. 8's plan: first equation k = 4, q = 3, L = 9, ε = 0.6e−10.
+ArxOptions Figure8Options() {
+  ArxOptions options;
+  options.order = 3;
+  options.first_equation = 4;
+  options.decimation = 3;
+  options.max_equations = 9;
+  options.epsilon = 0.6e-10;
+  return options;
+}
+
 TEST(ArxFigure8, IllConditionedSystemNeedsEpsilon) {
   const Figure7Data data = MakeFigure7();
   // Exact column of PAPER_NUMBERS.md (all 29 equations, q = 1), to its printed 4 decimals.
@@ -87,12 +91,7 @@ TEST(ArxFigure8, IllConditionedSystemNeedsEpsilon) {
   std::printf("Fig. 8: without epsilon status %s, max |g - g_true| = %.3g\n", ToString(without.status), error_without);
   EXPECT_TRUE(without.status != SolverStatus::kOk || error_without > 1e-2);
   // IdentifyArx with the same plan (first equation k = 4, q = 3, L = 9) and ε reproduces it.
-  ArxOptions options;
-  options.order = 3;
-  options.first_equation = 4;
-  options.decimation = 3;
-  options.max_equations = 9;
-  options.epsilon = 0.6e-10;
+  ArxOptions options = Figure8Options();
   const ArxResult arx = IdentifyArx(MakeIoRecord(data.u, data.y, 0.4), options);
   EXPECT_EQ(arx.equations, 9);
   EXPECT_LT((arx.g - printed).cwiseAbs().maxCoeff(), 1.5e-3);
@@ -100,12 +99,7 @@ TEST(ArxFigure8, IllConditionedSystemNeedsEpsilon) {
 
 TEST(ArxFigure9, ContinuousModelAndSteadyState) {
   const Figure7Data data = MakeFigure7();
-  ArxOptions options;
-  options.order = 3;
-  options.first_equation = 4;
-  options.decimation = 3;
-  options.max_equations = 9;
-  options.epsilon = 0.6e-10;
+  ArxOptions options = Figure8Options();
   options.log_series_terms = 11;  // Fig. 9 sums k = 0..10
   const ArxResult arx = IdentifyArx(MakeIoRecord(data.u, data.y, 0.4), options);
   // y(∞) = 0.6667 by (2.4) (and by (1.15)); the data came from the 8-term series, so 1e-3.
@@ -144,15 +138,7 @@ IoRecord PlantRecord(double noise_sigma, std::uint64_t seed, int samples = 2000)
 }
 
 double MaxPoleError(const TransferFunction& estimate) {
-  const Eigen::VectorXcd truth = Poles(PlantTf());
-  const Eigen::VectorXcd est = Poles(estimate);
-  double worst = 0.0;
-  for (int i = 0; i < truth.size(); ++i) {
-    double best = 1e300;
-    for (int j = 0; j < est.size(); ++j) best = std::min(best, std::abs(truth(i) - est(j)));
-    worst = std::max(worst, best);
-  }
-  return worst;
+  return testing::MaxPoleDistance(Poles(PlantTf()), Poles(estimate));
 }
 
 TEST(ArxPlant, NoiseFreeRecoversContinuousPlantExactly) {
@@ -188,17 +174,8 @@ TEST(ArxPlant, OutputNoiseBiasIsReportedAndOutputErrorRefinementRemovesIt) {
   // biased model has a negative real pole and no continuous realisation).
   auto pole_error = [](const ArxResult& r) {
     const Eigen::VectorXcd z = Poles(r.discrete_tf);
-    TransferFunction mapped;
-    Eigen::VectorXcd s(z.size());
-    for (int i = 0; i < z.size(); ++i) s(i) = std::log(z(i)) / r.sample_time;
-    const Eigen::VectorXcd truth = Poles(PlantTf());
-    double worst = 0.0;
-    for (int i = 0; i < truth.size(); ++i) {
-      double best = 1e300;
-      for (int j = 0; j < s.size(); ++j) best = std::min(best, std::abs(truth(i) - s(j)));
-      worst = std::max(worst, best);
-    }
-    return worst;
+    const Eigen::VectorXcd s = z.array().log() / r.sample_time;
+    return testing::MaxPoleDistance(Poles(PlantTf()), s);
   };
   const double e_plain = pole_error(plain), e_iv = pole_error(iv);
   std::printf("PRBS, sigma=0.01: plain ARX max pole error %.3g (fit %.2f %%, residuals %s, "

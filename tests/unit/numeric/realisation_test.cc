@@ -8,17 +8,15 @@
 
 #include "core/numeric/lti_model.h"
 
+#include "tests/unit/numeric/seed001_plant.h"
+
 namespace idrig {
 namespace {
 
 // Plant R1 of Figs. 3–5: W(p) = (0.5p + 1)/(p³ + 2.5p² + 4p + 1.5).
-Eigen::MatrixXd PlantA() {
-  Eigen::MatrixXd a(3, 3);
-  a << 0, 1, 0, 0, 0, 1, -1.5, -4.0, -2.5;
-  return a;
-}
-Eigen::VectorXd PlantB() { return Eigen::Vector3d(0, 0.5, -0.25); }
-Eigen::RowVectorXd PlantH() { return Eigen::RowVector3d(1, 0, 0); }
+using testing::PlantA;
+using testing::PlantB;
+using testing::PlantH;
 
 constexpr double kPrinted3 = 0.5e-3;  // three printed decimals
 constexpr double kExact5 = 0.6e-5;    // five decimals of the "exact" column

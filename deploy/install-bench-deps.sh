@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# Packages needed only by the comparison benchmarks (Octave and its control package).
+set -euo pipefail
+need=()
+for p in octave octave-control time; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || need+=("$p")
+done
+if ((${#need[@]})); then
+  DEBIAN_FRONTEND=noninteractive apt-get install -y -q --no-install-recommends "${need[@]}"
+fi
