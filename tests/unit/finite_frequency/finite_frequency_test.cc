@@ -350,6 +350,48 @@ TEST(FiniteFrequencyTest, UnshiftIsTheInverseOfTheShift) {
   EXPECT_NEAR(k[1], 0.5, 1e-14);
 }
 
+TEST(FiniteFrequencyTest, DisturbanceThirtyNineReadings) {
+  // kPeriodStart: whole cycles, +a for π/ω_f then −a for π/ω_f, ω_f ∈ [3, 5]; covers
+  // [start_time, duration].
+  const auto f = RandomSquareWaveDisturbance(5.0, 3.0, 5.0, 50.0, 7, SquareWavePhase::kPeriodStart,
+                                             -20.0);
+  ASSERT_GE(f.start_times.size(), 2u);
+  EXPECT_DOUBLE_EQ(f.start_times.front(), -20.0);
+  EXPECT_GE(f.start_times.back() + kPi / 3, 50.0);
+  for (size_t i = 0; i + 1 < f.start_times.size(); ++i) {
+    const double half = f.start_times[i + 1] - f.start_times[i];
+    EXPECT_GE(half, kPi / 5 - 1e-12);
+    EXPECT_LE(half, kPi / 3 + 1e-12);
+    EXPECT_EQ(f.values[i], i % 2 == 0 ? 5.0 : -5.0);
+    if (i % 2 == 1)  // the two halves of one period are equally long: ∫f = 0 per period
+      EXPECT_NEAR(half, f.start_times[i] - f.start_times[i - 1], 1e-12);
+  }
+  // kExperimentTime: sign(sin ω_f t) with the experiment time; every piece lies inside one
+  // half-wave of its ω_f, so pieces are at most π/3 long, and some are shorter than π/5 (the
+  // random phase at each redraw).
+  const auto g = RandomSquareWaveDisturbance(5.0, 3.0, 5.0, 50.0, 7,
+                                             SquareWavePhase::kExperimentTime);
+  double shortest = 1e9;
+  for (size_t i = 0; i + 1 < g.start_times.size(); ++i) {
+    shortest = std::min(shortest, g.start_times[i + 1] - g.start_times[i]);
+    EXPECT_LE(g.start_times[i + 1] - g.start_times[i], kPi / 3 + 1e-12);
+  }
+  EXPECT_LT(shortest, kPi / 5);
+  // A disturbance acting before t0: the same as simulating from its start with everything
+  // shifted by 20 s (independent run, no pre-roll), sampled from index 20/h on.
+  const double h = 0.01;
+  SineExperimentSetup early;
+  early.plant = Plant40();
+  early.disturbance = f;
+  const auto a = SimulateSineExperiment(early, h, 3001);
+  SineExperimentSetup shifted = early;
+  for (double& t : shifted.disturbance.start_times) t += 20.0;
+  const auto b = SimulateSineExperiment(shifted, h, 5001);
+  EXPECT_GT(std::abs(a.natural_output[0]), 1e-3);  // the plant is not at rest at t0
+  for (int k = 0; k < 3001; k += 7)
+    EXPECT_NEAR(a.natural_output[k], b.natural_output[k + 2000], 1e-9) << k;
+}
+
 template <typename F>
 void ExpectInvalid(F f, const std::string& fragment) {
   try {
