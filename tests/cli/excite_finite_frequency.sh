@@ -94,6 +94,11 @@ grep -q "finite-frequency identification" "$dir/ff.txt" || fail "text report: $(
 # --- --frequencies: bad lists and methods that do not take it.
 expect "method 'arx' does not" \
   "$idrig" identify --data "$dir/rec.csv" --method arx --order 3 --frequencies "$w"
+expect "unknown method 'nope'" \
+  "$idrig" identify --data "$dir/rec.csv" --method nope --frequencies "$w"
+expect "got ''" \
+  "$idrig" identify --data "$dir/rec.csv" --method finite-frequency --order 3 \
+  --option base_omega="$wb" --frequencies ""
 expect "got 'abc'" \
   "$idrig" identify --data "$dir/rec.csv" --method finite-frequency --order 3 \
   --option base_omega="$wb" --frequencies "0.3,abc"

@@ -65,11 +65,11 @@ void RegisterIdentifyCommand(CLI::App& app) {
   cmd->add_option("--order", args->order, "model order (0 or absent: chosen automatically)");
   cmd->add_option("--option", args->options, "method option key=value (value is JSON or a word); repeatable");
   cmd->add_option("--options-json", args->options_json, "method options as one JSON object");
-  cmd->add_option("--frequencies", args->frequencies,
+  CLI::Option* frequencies = cmd->add_option("--frequencies", args->frequencies,
                   "test frequencies w1,w2,... [rad/s] (methods that take them: finite-frequency); "
                   "the same as --option \"frequencies=[w1,w2,...]\"");
   cmd->add_flag("--json", args->json, "print the model as idrig.model/1 JSON (with an \"identification\" report)");
-  cmd->callback([args] {
+  cmd->callback([args, frequencies] {
     nlohmann::json options = args->options_json.empty() ? nlohmann::json::object()
                                                         : nlohmann::json::parse(args->options_json);
     if (args->order > 0) options["order"] = args->order;
@@ -79,7 +79,8 @@ void RegisterIdentifyCommand(CLI::App& app) {
         throw std::invalid_argument("--option expects key=value, got '" + kv + "'");
       options[kv.substr(0, eq)] = ParseOptionValue(kv.substr(eq + 1));
     }
-    if (!args->frequencies.empty()) {
+    if (frequencies->count() > 0) {
+      FindMethod(args->method);  // an unknown method is reported as such
       if (!TakesFrequencies(args->method))
         throw std::invalid_argument("--frequencies is for methods that take test frequencies "
                                     "(finite-frequency); method '" + args->method +
