@@ -363,8 +363,9 @@ TEST(FiniteFrequencyTest, DisturbanceThirtyNineReadings) {
     EXPECT_GE(half, kPi / 5 - 1e-12);
     EXPECT_LE(half, kPi / 3 + 1e-12);
     EXPECT_EQ(f.values[i], i % 2 == 0 ? 5.0 : -5.0);
-    if (i % 2 == 1)  // the two halves of one period are equally long: ∫f = 0 per period
+    if (i % 2 == 1) {  // the two halves of one period are equally long: ∫f = 0 per period
       EXPECT_NEAR(half, f.start_times[i] - f.start_times[i - 1], 1e-12);
+    }
   }
   // kExperimentTime: sign(sin ω_f t) with the experiment time; every piece lies inside one
   // half-wave of its ω_f, so pieces are at most π/3 long, and some are shorter than π/5 (the
