@@ -256,6 +256,29 @@ ModalPolyrefResult IdentifyModalPolyref(const std::vector<Eigen::MatrixXd>& g, d
   return result;
 }
 
+StateSpace ModalStateSpace(const ModalPolyrefResult& result, int first_sample) {
+  const int nm = static_cast<int>(result.modes.size());
+  const int m = result.outputs, n = result.inputs;
+  StateSpace ss;
+  ss.sample_time = result.sample_time;
+  ss.A = Eigen::MatrixXd::Zero(2 * nm, 2 * nm);
+  ss.B = Eigen::MatrixXd::Zero(2 * nm, n);
+  ss.C = Eigen::MatrixXd::Zero(m, 2 * nm);
+  ss.D = Eigen::MatrixXd::Zero(m, n);
+  for (int j = 0; j < nm; ++j) {
+    const Mode& mode = result.modes[j];
+    const cd z = std::exp(mode.s * result.sample_time);
+    // G(kT) = Σ v z^(k − first + 1) w^T + c.c. = C A^(k−1) B with β = z^(2 − first) w^T.
+    const Eigen::VectorXcd beta = std::pow(z, 2 - first_sample) * mode.participation;
+    ss.A.block(2 * j, 2 * j, 2, 2) << z.real(), -z.imag(), z.imag(), z.real();
+    ss.B.row(2 * j) = beta.real().transpose();
+    ss.B.row(2 * j + 1) = beta.imag().transpose();
+    ss.C.col(2 * j) = 2.0 * mode.shape.real();
+    ss.C.col(2 * j + 1) = -2.0 * mode.shape.imag();
+  }
+  return ss;
+}
+
 FirEstimate EstimateImpulseResponseFir(const IoRecord& record, int length, double lambda) {
   ValidateIoRecord(record, 2);
   const int n = record.NumSamples(), nu = record.NumInputs(), ny = record.NumOutputs();

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "core/numeric/io_record.h"
+#include "core/numeric/lti_model.h"
 #include "core/numeric/result.h"
 
 namespace idrig {
@@ -77,6 +78,11 @@ struct ModalPolyrefResult : ResultBase {
 // series, inconsistent sizes (naming the first offending k), NaN, or too few samples for p.
 ModalPolyrefResult IdentifyModalPolyref(const std::vector<Eigen::MatrixXd>& impulse_responses,
                                         double sample_time, const ModalPolyrefOptions& options = {});
+
+// Discrete real modal realisation of the identified modes, sample time T: its impulse response
+// (Markov parameters) h_k = C A^(k−1) B reproduces the modal model (38) of G(kT) for k >= 1
+// (D = 0). Each mode gives the 2×2 block [[Re z, −Im z], [Im z, Re z]], z = exp(s T).
+StateSpace ModalStateSpace(const ModalPolyrefResult& result, int first_sample = 1);
 
 // Regularised FIR least squares: y(t) = Σ_{k=0}^{L−1} G_k u(t − k) + e, ridge parameter λ
 // chosen by generalised cross-validation (or given, λ > 0), shared by all outputs.

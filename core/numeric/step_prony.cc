@@ -898,7 +898,11 @@ StepPronyResult IdentifyStepResponse(const IoRecord& record, const StepPronyOpti
   const int n = record.NumSamples();
   const Eigen::VectorXd u = record.u.col(0), y = record.y.col(0);
   const int tail = std::max(5, static_cast<int>(options.tail_fraction * n));
-  const double u0 = u(0), u1 = u.tail(tail).mean();
+  const double u1 = u.tail(tail).mean();
+  double u0 = u(0);
+  // An input already at its final level at the first sample: the step of (4) was applied at
+  // t = 0 from rest (zero initial conditions), so the level before it is 0.
+  if (std::abs(u1 - u0) <= 1e-12 * (1.0 + std::abs(u1)) && std::abs(u1) > 0.0) u0 = 0.0;
   const double c = u1 - u0;
   if (!(std::abs(c) > 1e-12 * (1.0 + u.cwiseAbs().maxCoeff())))
     Fail("the input does not step: its final level equals its initial level " + Num(u0));

@@ -179,3 +179,25 @@ TEST(ModalPolyref, BadInputInconsistentSize) {
 
 }  // namespace
 }  // namespace idrig
+
+namespace idrig {
+namespace {
+// The real modal realisation reproduces the impulse responses it was identified from.
+TEST(ModalPolyref, ModalStateSpaceReproducesG) {
+  const Chain c = MakeChain();
+  const double ts = 0.01;
+  const auto g = ImpulseResponse(c.ss, ts, 300);
+  ModalPolyrefOptions o;
+  o.modes = 3;
+  const ModalPolyrefResult r = IdentifyModalPolyref(g, ts, o);
+  const StateSpace ss = ModalStateSpace(r);
+  const auto h = ImpulseResponse(ss, ts, 300);  // discrete: Markov parameters D, CB, CAB, …
+  double err = 0.0, ref = 0.0;
+  for (int k = 1; k < 300; ++k) {
+    err = std::max(err, (h[k] - g[k]).cwiseAbs().maxCoeff());
+    ref = std::max(ref, g[k].cwiseAbs().maxCoeff());
+  }
+  EXPECT_LT(err / ref, 1e-6);
+}
+}  // namespace
+}  // namespace idrig
