@@ -211,6 +211,9 @@ MethodReport RunModalPolyref(const MethodInput& input, const json& o) {
   const FirEstimate fir = EstimateImpulseResponseFir(record, fir_length, lambda);
   ModalPolyrefResult r = IdentifyModalPolyref(fir.impulse_responses, record.sample_time, options);
   r.impulse_response_source = fir.method;
+  if (r.modes.empty())
+    throw std::invalid_argument("modal-polyref: no oscillatory pole with 0 < zeta <= max_damping in the band at any "
+                                "order p; the record shows no resonance (try max_damping, max_frequency_hz, p_max)");
   const StateSpace model = ModalStateSpace(r, options.first_sample);
   double fit = 0.0;
   Eigen::VectorXd fits;

@@ -182,6 +182,15 @@ ModalPolyrefResult IdentifyModalPolyref(const std::vector<Eigen::MatrixXd>& g, d
     }
     if (pick.orders >= needed) picks.push_back(pick);
   }
+  const bool none_stable = picks.empty();
+  if (none_stable) {
+    // Nothing persisted: keep every candidate pole at p_final so that a model still exists,
+    // and say so (status ill-conditioned).
+    for (const auto& c : by_order[p_final]) picks.push_back(Pick{c, 1});
+    result.warnings.push_back("no pole persisted over " + std::to_string(needed) + " orders of the stabilisation "
+                              "diagram; every candidate pole at p = " + std::to_string(p_final) +
+                              " is kept (loosen frequency_tolerance/damping_tolerance or min_stable_fraction)");
+  }
   if (options.modes > 0 && static_cast<int>(picks.size()) > options.modes) {
     std::stable_sort(picks.begin(), picks.end(), [](const Pick& a, const Pick& b) {
       return a.orders != b.orders ? a.orders > b.orders : a.c.zeta < b.c.zeta;
@@ -244,11 +253,11 @@ ModalPolyrefResult IdentifyModalPolyref(const std::vector<Eigen::MatrixXd>& g, d
 
   result.iterations = 1;
   result.fit_percent = result.fit_percent_impulse;
-  result.status = nm > 0 ? SolverStatus::kOk : SolverStatus::kFailed;
+  result.status = nm == 0 ? SolverStatus::kFailed : (none_stable ? SolverStatus::kIllConditioned : SolverStatus::kOk);
   std::ostringstream msg;
-  msg << nm << " stable modes at p = " << p_final << " (stabilisation over p = " << options.p_min << ".." << p_max
+  msg << nm << (none_stable ? " unconfirmed" : " stable") << " modes at p = " << p_final << " (stabilisation over p = " << options.p_min << ".." << p_max
       << "), condition number of (44) " << Num(result.excitation_condition_number);
-  if (nm == 0) msg << "; no pole persisted over " << needed << " orders";
+  if (none_stable) msg << "; no pole persisted over " << needed << " orders";
   if (result.excitation_condition_number > 1e12 && nm > 0) {
     msg << "; (44) is rank deficient (p larger than needed): the minimum-norm solution was used";
   }
