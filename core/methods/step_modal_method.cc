@@ -9,7 +9,8 @@
 // modes are identified from them.
 //   idrig identify --data mimo.csv --method modal-polyref [--option modes=3] --json
 // Options: fir_length, lambda, modes, p, p_min, p_max, first_sample, max_damping,
-// max_frequency_hz, frequency_tolerance, damping_tolerance, min_stable_orders, min_stable_fraction.
+// max_frequency_hz, frequency_tolerance, damping_tolerance, min_stable_orders, min_stable_fraction,
+// als_iterations.
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -184,7 +185,7 @@ MethodReport RunStepProny(const MethodInput& input, const json& o) {
 MethodReport RunModalPolyref(const MethodInput& input, const json& o) {
   CheckOptionKeys(o, {"order", "fir_length", "lambda", "modes", "p", "p_min", "p_max", "first_sample", "max_damping",
                       "max_frequency_hz", "frequency_tolerance", "damping_tolerance", "min_stable_orders",
-                      "min_stable_fraction"},
+                      "min_stable_fraction", "als_iterations"},
                   "modal-polyref");
   const Options get{o};
   const IoRecord& record = *input.record;
@@ -203,6 +204,7 @@ MethodReport RunModalPolyref(const MethodInput& input, const json& o) {
   get.Double("damping_tolerance", &options.damping_tolerance);
   get.Int("min_stable_orders", &options.min_stable_orders);
   get.Double("min_stable_fraction", &options.min_stable_fraction);
+  get.Int("als_iterations", &options.als_iterations);
   int fir_length = std::min(200, record.NumSamples() / (3 * std::max(1, record.NumInputs())));
   get.Int("fir_length", &fir_length);
   double lambda = 0.0;

@@ -218,14 +218,29 @@ ModalPolyrefResult IdentifyModalPolyref(const std::vector<Eigen::MatrixXd>& g, d
   }
   Eigen::MatrixXcd v(m, ne);
   if (ne > 0) {
-    // Eq. (52): V = [G_k] [exp(k S T) W^T]⁺ over all k (G_k = Σ_j v_j z_j^k w_j^T, k = 1, 2, …).
-    Eigen::MatrixXcd rt(len * n, ne);  // transpose of [exp(kST) W^T]
-    Eigen::MatrixXd gt(len * n, m);    // transpose of [G_1 G_2 …]
+    Eigen::MatrixXd gt(len * n, m);  // transpose of [G_1 G_2 …]
+    Eigen::MatrixXd gv(len * m, n);  // [G_1; G_2; …]
     for (int k = 0; k < len; ++k) {
-      for (int j = 0; j < ne; ++j) rt.block(k * n, j, n, 1) = std::pow(z(j), k + 1) * w.col(j);
       gt.block(k * n, 0, n, m) = gs[k].transpose();
+      gv.block(k * m, 0, m, n) = gs[k];
     }
-    v = rt.completeOrthogonalDecomposition().solve(gt.cast<cd>()).transpose();
+    Eigen::MatrixXcd rt(len * n, ne);  // transpose of [exp(kST) W^T]
+    auto solve_v = [&] {
+      // Eq. (52): V = [G_k] [exp(k S T) W^T]⁺ over all k (G_k = Σ_j v_j z_j^k w_j^T, k = 1, 2, …).
+      for (int k = 0; k < len; ++k)
+        for (int j = 0; j < ne; ++j) rt.block(k * n, j, n, 1) = std::pow(z(j), k + 1) * w.col(j);
+      v = rt.completeOrthogonalDecomposition().solve(gt.cast<cd>()).transpose();
+    };
+    solve_v();
+    // Optional alternating least squares (beyond the paper): W again from all G_k given V (the
+    // transpose of (52)), then V; W of (51) rests on one eigenvector and is noise-sensitive.
+    for (int it = 0; it < options.als_iterations; ++it) {
+      Eigen::MatrixXcd mv(len * m, ne);
+      for (int k = 0; k < len; ++k)
+        for (int j = 0; j < ne; ++j) mv.block(k * m, j, m, 1) = std::pow(z(j), k + 1) * v.col(j);
+      w = mv.completeOrthogonalDecomposition().solve(gv.cast<cd>()).transpose();
+      solve_v();
+    }
     // Fit of the modal model (38) to the impulse responses.
     const Eigen::MatrixXd model = (rt * v.transpose()).real();
     result.fit_percent_impulse = FitPercent(Eigen::Map<const Eigen::VectorXd>(gt.data(), gt.size()),

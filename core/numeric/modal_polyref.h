@@ -40,6 +40,8 @@ struct ModalPolyrefOptions {
   double damping_tolerance = 0.05;    // stabilisation: |Δζ| <= this·ζ + 0.001
   int min_stable_orders = 3;       // a physical mode is found at >= this many orders
   double min_stable_fraction = 0.5;  // ... and at >= this fraction of the orders p_min..p_max
+  int als_iterations = 0;  // after W (51) and V (52): alternating least-squares refinements of
+                           // W and V on all G_k (beyond the paper; 0 = the paper's estimates)
 };
 
 struct StabilisationPoint {
