@@ -393,12 +393,10 @@ struct VarProFunctor : Eigen::DenseFunctor<double> {
       : Eigen::DenseFunctor<double>(f.linear + 2 * f.quadratic, static_cast<int>(t.size())), f(f), t(t), x(x) {}
   int operator()(const Eigen::VectorXd& theta, Eigen::VectorXd& residual) const {
     const Eigen::MatrixXd g = FactorColumns(f, theta, t);
-    double cond = 0.0;
     Eigen::VectorXd scale = g.colwise().norm().transpose();
     for (int i = 0; i < scale.size(); ++i)
       if (!(scale(i) > 0)) scale(i) = 1.0;
     const Eigen::MatrixXd gs = g * scale.cwiseInverse().asDiagonal();
-    (void)cond;
     residual = x - gs * gs.colPivHouseholderQr().solve(x);
     return 0;
   }

@@ -11,7 +11,12 @@
 // holds for every α; the roots z of 1 + Σ D_s z^s = 0 (18) give b_v = −ln(z_v)/h (16), and a
 // pole of multiplicity N_v is an N_v-fold root. Against noise the samples are replaced by block
 // averages over B sub-intervals of h (25) (system (30); residues by (32)–(35)) or by integrals
-// over each interval of length h; the order is the m of minimum prediction residual (36)–(41).
+// over each interval of length h; the order comes from the residuals (36)–(41).
+//
+// Beyond the paper (each switchable): the LP may be solved in the rank-m signal subspace of an
+// extended matrix, written at every sample shift, with x(∞) re-estimated from the first fit;
+// the LP poles are refined by variable projection before multiplicities are decided by a
+// noise-level test on the fit (see docs/step_modal.md).
 //
 // Units: time [s]; b_v [1/s]; A_vj in units of K(p) times (1/s)^(N_v+1−j).
 #include <Eigen/Dense>
@@ -43,7 +48,8 @@ enum class StepLpSolver {
 const char* ToString(StepLpSolver solver);
 
 struct StepPronyOptions {
-  int order = 0;          // m; 0: chosen by the minimum residual (36)–(41) over 1..max_order
+  int order = 0;          // m; 0: chosen over 1..max_order from the order table (36)–(41): the
+                          // smallest m whose fitted residual is within σ²χ²_0.999 of the minimum
   int max_order = 8;
   int spacing = 0;        // h in samples (h = spacing·Ts); 0: automatic (about 4·max_order
                           // intervals over the transient)
