@@ -261,3 +261,36 @@ TEST(StepProny, BadInputNotAStep) {
 
 }  // namespace
 }  // namespace idrig
+
+namespace idrig {
+namespace {
+// Every averaging (point samples (20)/(23), block means (25)/(35), integrals) and every LP
+// solver recovers the noise-free plant; the m-point residue system (20)/(35) alone, on the
+// averaged values, gives the residues to 1e−5 (it uses only m values of the sequence).
+TEST(StepProny, NoiseFreeEveryVariant) {
+  const double ts = 0.02;
+  const Eigen::VectorXd x = StepRecord(2000, ts, 1.0);
+  for (StepAveraging averaging : {StepAveraging::kNone, StepAveraging::kBlock, StepAveraging::kIntegral}) {
+    for (StepLpSolver solver : {StepLpSolver::kQr, StepLpSolver::kTls, StepLpSolver::kSubspace}) {
+      StepPronyOptions o;
+      o.averaging = averaging;
+      o.solver = solver;
+      o.order = 4;
+      o.refine = false;  // the LP roots themselves
+      const StepPronyResult r = IdentifyStepResponse(x, ts, 1.0, o);
+      SCOPED_TRACE(std::string(ToString(averaging)) + "/" + ToString(solver));
+      std::printf("%-8s %-8s LP cond %-10.4g pole error %.2e, eq20 residue cond %.3g\n", ToString(averaging),
+                  ToString(solver), r.lp_condition_number, PoleError(r), r.residue_condition_eq20);
+      EXPECT_LT(PoleError(r), 1e-6);
+      const StepPole* real = FindReal(r);
+      const StepPole* pair = FindPair(r);
+      ASSERT_TRUE(real && pair);
+      EXPECT_EQ(real->multiplicity, 2);
+      EXPECT_LT(std::abs(real->residues_eq20(0) - kA11) / kA11, 1e-5);
+      EXPECT_LT(std::abs(real->residues_eq20(1) - kA12) / kA12, 1e-5);
+      EXPECT_LT(std::abs(pair->residues_eq20(0) - PairResidue()) / std::abs(PairResidue()), 1e-5);
+    }
+  }
+}
+}  // namespace
+}  // namespace idrig
