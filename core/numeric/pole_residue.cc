@@ -126,13 +126,14 @@ std::vector<int> FindPeaks(const Eigen::VectorXd& magnitude, double tolerance) {
   }
   if (g(n - 2) > g(n - 1)) minima.push_back(n - 1);
   for (int i : maxima) {
-    // Neighbouring minima (or the band ends).
-    int left = 0, right = n - 1;
-    for (int j : minima) {
-      if (j < i) left = j;
-      if (j > i) { right = j; break; }
-    }
-    const double drop = std::max(g(i) - g(left), g(i) - g(right)) / g(i);
+    // Relative drop of the smoothed |g| on both sides: down to the lowest point before the
+    // curve rises above g(i) again (or the band ends), i.e. the topographic prominence.
+    // The listing compares with the adjacent minima and takes the larger drop, which with
+    // noisy data lets wiggles pass and splits real peaks; this keeps its intent.
+    double left = g(i), right = g(i);
+    for (int j = i - 1; j >= 0 && g(j) <= g(i); --j) left = std::min(left, g(j));
+    for (int j = i + 1; j < n && g(j) <= g(i); ++j) right = std::min(right, g(j));
+    const double drop = (g(i) - std::max(left, right)) / g(i);
     if (drop > tolerance) peaks.push_back(i);
   }
   return peaks;

@@ -2,7 +2,9 @@
 // SISO indirect identification by pole–residue fitting, section 4 of [Balda] (`ideSISO`):
 //   g(p) ≐ Σ_{ν=ν_a−1}^{ν_b+1} a_ν/(p − s_ν) + h_o,   p = iω                   (25), (35)
 // 1. resonance peaks of the smoothed |g| as in `peaks` (3-point smoothing (1,3,1)/5, local
-//    maxima, relative drop to the neighbouring minima above a tolerance), or given lines;
+//    maxima whose relative prominence (drop on BOTH sides before |g| rises above the peak)
+//    exceeds a tolerance — the listing compares with the adjacent minima and takes the larger
+//    drop, which lets noise wiggles pass), or given lines;
 // 2. for each peak a 5-point estimate of s_ν, a_ν and the local offset g_ν from (29)–(31),
 //    first with s_ν ≈ p_m (the peak line) in the third column, then refined once with ŝ_ν;
 // 3. one fictitious pole at each end of the band (ν_a−1, ν_b+1), estimated the same way from
