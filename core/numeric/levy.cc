@@ -68,38 +68,52 @@ LevyResult FitLevy(const Frf& frf, const LevyOptions& options) {
     g(k) = frf.h[k](0, 0);
   }
   // Unknowns c = [a_0 … a_{n−1} | b_0 … b_m] (scaled variable), a_n = 1.
-  auto solve = [&](const Eigen::VectorXd& row_scale, Eigen::VectorXd* a, Eigen::VectorXd* b) {
-    Eigen::MatrixXd A(2 * lines, unknowns);
-    Eigen::VectorXd y(2 * lines);
-    for (int k = 0; k < lines; ++k) {
-      const double s = row_scale(k);
-      Complex pj = 1.0;
-      // Eq. (5) of [Balda]: [G, pG, …, p^{n−1}G | −1, −p, …, −p^m] c ≐ −p^n G.
-      for (int j = 0; j < n; ++j, pj *= p(k)) {
-        const Complex v = s * pj * g(k);
-        A(k, j) = v.real();
-        A(lines + k, j) = v.imag();
+  // Eq. (5) of [Balda]: [G, pG, …, p^{n−1}G | −1, −p, …, −p^m] c ≐ −p^n G, real and imaginary
+  // parts stacked. Built once column by column; every (re)weighting only scales its rows.
+  Eigen::MatrixXd A0(2 * lines, unknowns);
+  Eigen::VectorXd y0(2 * lines);
+  {
+    Eigen::VectorXcd pj = Eigen::VectorXcd::Ones(lines);
+    for (int j = 0; j <= std::max(n, m); ++j) {
+      if (j < n) {
+        const Eigen::VectorXcd v = pj.cwiseProduct(g);
+        A0.col(j).head(lines) = v.real();
+        A0.col(j).tail(lines) = v.imag();
+      } else if (j == n) {
+        const Eigen::VectorXcd v = -pj.cwiseProduct(g);
+        y0.head(lines) = v.real();
+        y0.tail(lines) = v.imag();
       }
-      const Complex rhs = -s * pj * g(k);
-      y(k) = rhs.real();
-      y(lines + k) = rhs.imag();
-      pj = 1.0;
-      for (int j = 0; j <= m; ++j, pj *= p(k)) {
-        const Complex v = -s * pj;
-        A(k, n + j) = v.real();
-        A(lines + k, n + j) = v.imag();
+      if (j <= m) {
+        A0.col(n + j).head(lines) = -pj.real();
+        A0.col(n + j).tail(lines) = -pj.imag();
       }
+      pj = pj.cwiseProduct(p);
     }
-    // Eq. (7): c = A⁺ y, by column-pivoting QR with equilibrated columns.
+  }
+  Eigen::MatrixXd A(2 * lines, unknowns);
+  Eigen::VectorXd y(2 * lines), row2(2 * lines);
+  auto solve = [&](const Eigen::VectorXd& row_scale, Eigen::VectorXd* a, Eigen::VectorXd* b) {
+    row2.head(lines) = row_scale;
+    row2.tail(lines) = row_scale;
+    A.noalias() = row2.asDiagonal() * A0;
+    y = row2.cwiseProduct(y0);
+    // Eq. (7): c = A⁺ y by Householder QR with equilibrated columns (no pivoting needed for
+    // accuracy; rank deficiency is read from R's diagonal), decomposed in place.
     Eigen::VectorXd col = A.colwise().norm();
-    for (int j = 0; j < unknowns; ++j) col(j) = col(j) > 0.0 ? col(j) : 1.0;
-    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A * col.cwiseInverse().asDiagonal());
+    for (int j = 0; j < unknowns; ++j) {
+      col(j) = col(j) > 0.0 ? col(j) : 1.0;
+      A.col(j) /= col(j);
+    }
+    Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(A);
+    const Eigen::VectorXd r_diag = A.topRows(unknowns).diagonal().cwiseAbs();
+    const bool deficient = r_diag.minCoeff() <= 1e-13 * r_diag.maxCoeff();
     const Eigen::VectorXd c = col.cwiseInverse().asDiagonal() * qr.solve(y);
     a->resize(n + 1);
     a->head(n) = c.head(n);
     (*a)(n) = 1.0;
     *b = c.tail(m + 1);
-    return qr.rank() < unknowns;
+    return deficient;
   };
   auto response = [&](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
     Eigen::VectorXcd r(lines);
