@@ -69,46 +69,50 @@ LevyResult FitLevy(const Frf& frf, const LevyOptions& options) {
   }
   // Unknowns c = [a_0 … a_{n−1} | b_0 … b_m] (scaled variable), a_n = 1.
   // Eq. (5) of [Balda]: [G, pG, …, p^{n−1}G | −1, −p, …, −p^m] c ≐ −p^n G, real and imaginary
-  // parts stacked. Built once column by column; every (re)weighting only scales its rows.
-  Eigen::MatrixXd A0(2 * lines, unknowns);
-  Eigen::VectorXd y0(2 * lines);
-  {
-    Eigen::VectorXcd pj = Eigen::VectorXcd::Ones(lines);
-    for (int j = 0; j <= std::max(n, m); ++j) {
-      if (j < n) {
-        const Eigen::VectorXcd v = pj.cwiseProduct(g);
-        A0.col(j).head(lines) = v.real();
-        A0.col(j).tail(lines) = v.imag();
-      } else if (j == n) {
-        const Eigen::VectorXcd v = -pj.cwiseProduct(g);
-        y0.head(lines) = v.real();
-        y0.tail(lines) = v.imag();
-      }
-      if (j <= m) {
-        A0.col(n + j).head(lines) = -pj.real();
-        A0.col(n + j).tail(lines) = -pj.imag();
-      }
-      pj = pj.cwiseProduct(p);
-    }
-  }
-  Eigen::MatrixXd A(2 * lines, unknowns);
-  Eigen::VectorXd y(2 * lines), row2(2 * lines);
+  // parts stacked, every row scaled by its weight. Eq. (7), c = A⁺y, by Householder QR reduced
+  // block by block (R of [A | y] updated with 256 lines at a time): no 2L×(n+m+1) matrix is
+  // ever formed, and the cost is linear in L.
+  const int width = unknowns + 1;
+  constexpr int kBlock = 256;
+  Eigen::MatrixXd work(2 * kBlock + width, width);
   auto solve = [&](const Eigen::VectorXd& row_scale, Eigen::VectorXd* a, Eigen::VectorXd* b) {
-    row2.head(lines) = row_scale;
-    row2.tail(lines) = row_scale;
-    A.noalias() = row2.asDiagonal() * A0;
-    y = row2.cwiseProduct(y0);
-    // Eq. (7): c = A⁺ y by Householder QR with equilibrated columns (no pivoting needed for
-    // accuracy; rank deficiency is read from R's diagonal), decomposed in place.
-    Eigen::VectorXd col = A.colwise().norm();
-    for (int j = 0; j < unknowns; ++j) {
-      col(j) = col(j) > 0.0 ? col(j) : 1.0;
-      A.col(j) /= col(j);
+    Eigen::MatrixXd r = Eigen::MatrixXd::Zero(width, width);
+    for (int start = 0; start < lines; start += kBlock) {
+      const int count = std::min(kBlock, lines - start);
+      const int rows = 2 * count + width;
+      work.topRows(width) = r;
+      for (int i = 0; i < count; ++i) {
+        const int k = start + i;
+        const double s = row_scale(k);
+        Complex pj = s;
+        const int re = width + i, im = width + count + i;
+        for (int j = 0; j <= std::max(n, m); ++j, pj *= p(k)) {
+          if (j < n) {
+            const Complex v = pj * g(k);
+            work(re, j) = v.real();
+            work(im, j) = v.imag();
+          } else if (j == n) {
+            const Complex v = -pj * g(k);
+            work(re, unknowns) = v.real();
+            work(im, unknowns) = v.imag();
+          }
+          if (j <= m) {
+            work(re, n + j) = -pj.real();
+            work(im, n + j) = -pj.imag();
+          }
+        }
+      }
+      auto block = work.topRows(rows);
+      Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(block);
+      r = block.topRows(width).triangularView<Eigen::Upper>();
     }
-    Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(A);
-    const Eigen::VectorXd r_diag = A.topRows(unknowns).diagonal().cwiseAbs();
-    const bool deficient = r_diag.minCoeff() <= 1e-13 * r_diag.maxCoeff();
-    const Eigen::VectorXd c = col.cwiseInverse().asDiagonal() * qr.solve(y);
+    // R c = Qᵀy: the first `unknowns` rows of the reduced [R | Qᵀy].
+    const Eigen::MatrixXd rr = r.topLeftCorner(unknowns, unknowns);
+    Eigen::VectorXd col(unknowns);
+    for (int j = 0; j < unknowns; ++j) col(j) = rr.col(j).norm();  // = ‖A(:, j)‖
+    const Eigen::VectorXd rel = rr.diagonal().cwiseAbs().cwiseQuotient(col.cwiseMax(1e-300));
+    const bool deficient = !(rel.minCoeff() > 1e-13);
+    const Eigen::VectorXd c = rr.triangularView<Eigen::Upper>().solve(r.col(unknowns).head(unknowns));
     a->resize(n + 1);
     a->head(n) = c.head(n);
     (*a)(n) = 1.0;

@@ -2,7 +2,7 @@
 // SISO rational fit of a measured FRF, section 2.1 of [Balda]:
 //   G_m(p) = Σ_{j=0}^{m} b_j p^j / Σ_{j=0}^{n} a_j p^j,  p = iω   (1)
 // Levy's linearisation (4)–(7): multiplying the residual (3) by the denominator makes the
-// problem linear in a, b; it is solved by Householder QR (equilibrated columns) on the real and
+// problem linear in a, b; it is solved by Householder QR (reduced in blocks of lines) on the real and
 // imaginary parts stacked (the pseudoinverse solution (7)). Then the Sanathanan–Koerner
 // iterations (8): equation k is divided by the previous denominator |A^(l)(p_k)|, so that at
 // convergence the minimised quantity is the true output error G_m − G.
