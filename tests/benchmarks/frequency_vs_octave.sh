@@ -38,5 +38,7 @@ printf('octave invfreqs on the bias file (seed 1): max pole error %.4g; with ite
 OCT
 octave-cli -q "$dir/run.m" 2>&1 | grep -v "^warning: \|^warning: called from\|^    "
 
+echo "== pole-residue on Balda's table"
+"$bench" balda
 echo "== real data"
 "$bench" real "${2:-$(cd "$(dirname "$0")/../../.." && pwd)/shared}"
