@@ -139,7 +139,7 @@ TEST(PoleResidue, SingleModeClosedForm) {
 TEST(PoleResidue, BadInput) {
   Eigen::VectorXd omega = BaldaBand(50);
   Eigen::VectorXcd g = Truth(omega);
-  EXPECT_THROW(FitPoleResidue(MakeSisoFrf(omega, g.head(3)), {}), std::invalid_argument);  // length mismatch? head(3)
+  EXPECT_THROW(FitPoleResidue(MakeSisoFrf(omega, g.head(3)), {}), std::invalid_argument);  // 50 ω, 3 values
   Eigen::VectorXcd bad = g;
   bad(7) = Complex(NAN, 0.0);
   EXPECT_THROW(FitPoleResidue(MakeSisoFrf(omega, bad), {}), std::invalid_argument);
