@@ -136,6 +136,28 @@ TEST(PoleResidue, SingleModeClosedForm) {
   EXPECT_NEAR(std::abs(r.initial_modes[0].eigenvalue - s), 0.0, 0.05);
 }
 
+TEST(PoleResidue, LiteralEquation26WithoutConjugates) {
+  // (26)/(35) as printed: g = Σ a_ν/(p − s_ν) + h_o with complex h_o, no conjugate terms.
+  const Eigen::VectorXd omega = BaldaBand(500);
+  const Complex h_o(0.01, -0.02);
+  Eigen::VectorXcd g = Eigen::VectorXcd::Constant(omega.size(), h_o);
+  for (int v = 0; v < 7; ++v) {
+    const Complex s(kTable[v][0], kTable[v][1]), a(0.0, kTable[v][0] * kHeight[v]);
+    for (int k = 0; k < omega.size(); ++k) g(k) += a / (Complex(0.0, omega(k)) - s);
+  }
+  PoleResidueOptions options;
+  options.conjugate_pairs = false;
+  const PoleResidueResult r = FitPoleResidue(MakeSisoFrf(omega, g), options);
+  ASSERT_EQ(r.modes.size(), 7u);
+  for (int v = 0; v < 7; ++v) {
+    const Complex truth(kTable[v][0], kTable[v][1]);
+    double best = 1e300;
+    for (const auto& m : r.modes) best = std::min(best, std::abs(m.eigenvalue - truth));
+    EXPECT_LT(best, 1e-6 * std::abs(truth)) << "mode " << v + 1;
+  }
+  EXPECT_LT(std::abs(r.origin_correction - h_o), 1e-8);
+}
+
 TEST(PoleResidue, BadInput) {
   Eigen::VectorXd omega = BaldaBand(50);
   Eigen::VectorXcd g = Truth(omega);
