@@ -36,7 +36,7 @@ printf('octave invfreqs (nB = 8, nA = 10) on the same 10^4 lines: median %.4f s 
 printf('octave invfreqs on the bias file (seed 1): max pole error %.4g; with iter = 30: %.4g\n', ...
        pole_error(p, roots(A)), pole_error(p, roots(A2)));
 OCT
-octave-cli -q "$dir/run.m" 2>&1 | grep -v "^warning: \|^warning: called from\|^    "
+octave-cli -q "$dir/run.m" 2>&1 | grep -v "^warning: \|^warning: called from\|^    \|execution_exception"
 
 echo "== pole-residue on Balda's table"
 "$bench" balda
