@@ -10,11 +10,12 @@ namespace idrig {
 std::vector<MethodInfo> ArxMethods();
 std::vector<MethodInfo> FiniteFrequencyMethods();  // finite_frequency_method.cc
 std::vector<MethodInfo> StepModalMethods();        // step_modal_method.cc
+std::vector<MethodInfo> FrequencyMethods();        // frequency_method.cc
 
 const std::vector<MethodInfo>& Methods() {
   static const std::vector<MethodInfo> methods = [] {
     std::vector<MethodInfo> all;
-    for (auto family : {ArxMethods, FiniteFrequencyMethods, StepModalMethods}) {
+    for (auto family : {ArxMethods, FiniteFrequencyMethods, StepModalMethods, FrequencyMethods}) {
       auto some = family();
       all.insert(all.end(), some.begin(), some.end());
     }
