@@ -1,0 +1,32 @@
+#include "core/transport/service_util.h"
+
+#include <atomic>
+#include <csignal>
+#include <fstream>
+#include <stdexcept>
+
+namespace idrig {
+namespace {
+volatile std::sig_atomic_t g_stop = 0;
+void OnSignal(int) { g_stop = 1; }
+}  // namespace
+
+void InstallStopSignals() {
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+}
+
+bool StopRequested() { return g_stop != 0; }
+
+nlohmann::json ReadJsonConfig(const std::string& path) {
+  if (path.empty()) return nlohmann::json::object();
+  std::ifstream in(path);
+  if (!in) throw std::invalid_argument("cannot read config file '" + path + "'");
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const std::exception& e) {
+    throw std::invalid_argument("config file '" + path + "' is not valid JSON: " + e.what());
+  }
+}
+
+}  // namespace idrig

@@ -1,0 +1,238 @@
+#include "services/logger/logger_service.h"
+
+#include <chrono>
+
+#include <idrig/actuator_command_t.hpp>
+#include <idrig/experiment_status_t.hpp>
+#include <idrig/measurement_block_t.hpp>
+#include <idrig/replay_done_t.hpp>
+#include <idrig/replay_request_t.hpp>
+
+#include "core/transport/channels.h"
+#include "core/transport/service_util.h"
+
+namespace idrig {
+
+LoggerConfig LoggerConfig::FromJson(const nlohmann::json& c) {
+  LoggerConfig config;
+  config.db_path = ConfigValue<std::string>(c, "db_path", config.db_path);
+  config.queue_capacity = ConfigValue<size_t>(c, "queue_capacity", config.queue_capacity);
+  config.lcm_queue_capacity = ConfigValue<int>(c, "lcm_queue_capacity", config.lcm_queue_capacity);
+  return config;
+}
+
+LoggerService::LoggerService(Transport& transport, LoggerConfig config)
+    : transport_(transport),
+      config_(std::move(config)),
+      reporter_(transport, "logger", "logger-" + HostName()) {
+  // Open once here so that a bad path fails at start, not in the writer thread.
+  { ExperimentStore check(config_.db_path); }
+  auto subscribe = [this](ChannelKind channel, Kind kind) {
+    transport_.Subscribe(AnyRigChannel(channel),
+                         [this, kind](const std::string&, const uint8_t* d, size_t n) {
+                           Enqueue(kind, d, n);
+                         },
+                         config_.lcm_queue_capacity);
+  };
+  subscribe(ChannelKind::kMeasurement, Kind::kMeasurement);
+  subscribe(ChannelKind::kCommand, Kind::kCommand);
+  subscribe(ChannelKind::kExperimentStatus, Kind::kStatus);
+  subscribe(ChannelKind::kReplayRequest, Kind::kReplayRequest);
+  writer_ = std::thread([this] { WriterLoop(); });
+}
+
+LoggerService::~LoggerService() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  writer_.join();
+}
+
+void LoggerService::Enqueue(Kind kind, const uint8_t* data, size_t size) {
+  if (size > 65536) {
+    ++transport_.counters().oversized;
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (queue_.size() >= config_.queue_capacity) {
+      ++transport_.counters().dropped;
+      return;
+    }
+    queue_.push_back({kind, NowMicros(), std::vector<uint8_t>(data, data + size)});
+    if (queue_.size() > peak_queue_) peak_queue_ = queue_.size();
+  }
+  wake_.notify_one();
+}
+
+void LoggerService::WriterLoop() {
+  ExperimentStore store(config_.db_path);
+  auto last_summary = std::chrono::steady_clock::now() - std::chrono::seconds(10);
+  for (;;) {
+    std::deque<Item> batch;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_ || !queue_.empty(); });
+      if (stop_ && queue_.empty()) break;
+      batch.swap(queue_);
+      in_flight_ = batch.size();
+    }
+    if (!batch.empty()) {
+      try {
+        store.Begin();
+        std::vector<const Item*> replays;
+        for (const Item& item : batch) {
+          if (item.kind == Kind::kReplayRequest) replays.push_back(&item);
+          else Store(store, item);
+        }
+        store.Commit();
+        // Replays after the commit: they see everything received before them.
+        for (const Item* item : replays) Replay(store, *item);
+      } catch (const std::exception&) {
+        ++transport_.counters().handler_errors;
+        try { store.Commit(); } catch (...) {}
+      }
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      in_flight_ = 0;
+    }
+    drained_.notify_all();
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_summary > std::chrono::milliseconds(500)) {
+      last_summary = now;
+      try { UpdateSummary(store); } catch (...) { ++transport_.counters().handler_errors; }
+    }
+  }
+}
+
+void LoggerService::Store(ExperimentStore& store, const Item& item) {
+  const uint8_t* data = item.bytes.data();
+  const size_t size = item.bytes.size();
+  if (item.kind == Kind::kMeasurement) {
+    measurement_block_t block;
+    if (!Decode(data, size, &block, &transport_.counters())) return;
+    StoredBlock b;
+    b.seq = block.seq;
+    b.first_sample = block.first_sample;
+    b.n_samples = block.n_samples;
+    b.utime = block.utime;
+    b.recv_utime = item.recv_utime;
+    b.data = item.bytes;
+    if (store.AddBlock(block.rig_id, block.experiment_id, b)) ++stored_blocks_;
+    else ++duplicates_;
+  } else if (item.kind == Kind::kCommand) {
+    actuator_command_t command;
+    if (!Decode(data, size, &command, &transport_.counters())) return;
+    StoredBlock b;
+    b.seq = command.seq;
+    b.first_sample = command.first_sample;
+    b.n_samples = command.n_samples;
+    b.utime = command.utime;
+    b.recv_utime = item.recv_utime;
+    b.data = item.bytes;
+    if (store.AddCommand(command.rig_id, command.experiment_id, b)) ++stored_commands_;
+  } else if (item.kind == Kind::kStatus) {
+    experiment_status_t status;
+    if (!Decode(data, size, &status, &transport_.counters())) return;
+    StoredExperiment e;
+    e.rig_id = status.rig_id;
+    e.experiment_id = status.experiment_id;
+    e.updated_utime = item.recv_utime;
+    if (status.source == "excite") {
+      e.signal_spec = status.signal_spec;
+      e.sample_rate_hz = status.sample_rate_hz;
+    } else if (status.source == "rig") {
+      e.sample_rate_hz = status.sample_rate_hz;
+      e.ended = status.state != experiment_status_t::STATE_RUNNING &&
+                status.state != experiment_status_t::STATE_PENDING;
+      if (e.ended) {
+        e.blocks_total = status.blocks_total;
+        e.samples_total = status.samples_total;
+      }
+    }
+    store.UpdateExperiment(e);
+  }
+}
+
+void LoggerService::Replay(ExperimentStore& store, const Item& item) {
+  replay_request_t request;
+  if (!Decode(item.bytes.data(), item.bytes.size(), &request, &transport_.counters())) return;
+  ++replays_;
+  const std::set<int64_t> have(request.have_seqs.begin(), request.have_seqs.end());
+  const std::string replay_channel = Channel(request.rig_id, ChannelKind::kReplay);
+  int sent = 0;
+  for (const StoredBlock& b : store.Blocks(request.rig_id, request.experiment_id, have)) {
+    transport_.Publish(replay_channel, b.data.data(), b.data.size());
+    if (++sent % config_.replay_pause_every == 0)
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  replay_done_t done{};
+  done.utime = NowMicros();
+  done.replay_id = request.replay_id;
+  done.requester = request.requester;
+  done.rig_id = request.rig_id;
+  done.experiment_id = request.experiment_id;
+  StoredExperiment e;
+  if (store.FindExperiment(request.rig_id, request.experiment_id, &e)) {
+    done.ended = e.ended;
+    done.blocks_total = e.blocks_total;
+    done.samples_total = e.samples_total;
+  }
+  done.missing_seqs = store.MissingBlocks(request.rig_id, request.experiment_id);
+  if (done.missing_seqs.size() > 4000) done.missing_seqs.resize(4000);
+  done.n_missing = static_cast<int32_t>(done.missing_seqs.size());
+  done.complete = done.ended && done.n_missing == 0;
+  done.n_sent = sent;
+  transport_.PublishMessage(Channel(request.rig_id, ChannelKind::kReplayDone), done);
+}
+
+void LoggerService::UpdateSummary(ExperimentStore& store) {
+  nlohmann::json list = nlohmann::json::array();
+  auto experiments = store.Experiments();
+  const size_t first = experiments.size() > 10 ? experiments.size() - 10 : 0;
+  for (size_t i = first; i < experiments.size(); ++i) {
+    const StoredExperiment& e = experiments[i];
+    const auto missing = store.MissingBlocks(e.rig_id, e.experiment_id);
+    std::vector<int64_t> shown(missing.begin(), missing.begin() + std::min<size_t>(missing.size(), 50));
+    list.push_back({{"rig_id", e.rig_id}, {"experiment_id", e.experiment_id},
+                    {"blocks", e.blocks_stored}, {"commands", e.commands_stored},
+                    {"ended", e.ended}, {"blocks_total", e.blocks_total},
+                    {"missing_count", missing.size()}, {"missing", shown},
+                    {"complete", e.ended && missing.empty()}});
+  }
+  std::lock_guard<std::mutex> lock(summary_mutex_);
+  summary_ = list;
+}
+
+void LoggerService::Flush() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  drained_.wait(lock, [this] { return queue_.empty() && in_flight_ == 0; });
+}
+
+nlohmann::json LoggerService::Details() {
+  nlohmann::json d;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    d["queue"] = queue_.size();
+  }
+  d["queue_capacity"] = config_.queue_capacity;
+  d["peak_queue"] = peak_queue_.load();
+  d["db_path"] = config_.db_path;
+  d["stored_blocks"] = stored_blocks_.load();
+  d["stored_commands"] = stored_commands_.load();
+  d["duplicates"] = duplicates_.load();
+  d["replays"] = replays_.load();
+  std::lock_guard<std::mutex> lock(summary_mutex_);
+  d["experiments"] = summary_;
+  return d;
+}
+
+void LoggerService::Poll(int timeout_ms) {
+  transport_.Handle(timeout_ms);
+  reporter_.Maybe("running", Details().dump());
+}
+
+}  // namespace idrig
