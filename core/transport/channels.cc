@@ -17,6 +17,7 @@ const char* Suffix(ChannelKind kind) {
     case ChannelKind::kReplayRequest: return "REPLAY_REQ";
     case ChannelKind::kReplay: return "REPLAY";
     case ChannelKind::kReplayDone: return "REPLAY_DONE";
+    case ChannelKind::kRigReplayRequest: return "RIG_REPLAY_REQ";
   }
   return "?";
 }

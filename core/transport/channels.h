@@ -11,6 +11,8 @@
 //   IDRIG/<rig>/REPLAY_REQ  replay_request_t       worker -> logger
 //   IDRIG/<rig>/REPLAY      measurement_block_t    logger -> worker
 //   IDRIG/<rig>/REPLAY_DONE replay_done_t          logger -> worker
+//   IDRIG/<rig>/RIG_REPLAY_REQ replay_request_t    logger -> rig (blocks it lost; the rig
+//                                                  re-publishes them on MEAS)
 //   IDRIG/STATUS/<service>  service_status_t       every service, ~1 Hz
 // LCM limits channel names to 63 characters: rig ids are 1..24 of [A-Za-z0-9_-].
 #include <string>
@@ -19,7 +21,7 @@ namespace idrig {
 
 enum class ChannelKind {
   kExperimentRequest, kCommand, kMeasurement, kExperimentStatus, kIdentifyRequest, kClaim,
-  kResult, kAck, kReplayRequest, kReplay, kReplayDone
+  kResult, kAck, kReplayRequest, kReplay, kReplayDone, kRigReplayRequest
 };
 
 // Throws std::invalid_argument naming the rule when the rig id is not usable in a channel.

@@ -18,6 +18,8 @@ LoggerConfig LoggerConfig::FromJson(const nlohmann::json& c) {
   config.db_path = ConfigValue<std::string>(c, "db_path", config.db_path);
   config.queue_capacity = ConfigValue<size_t>(c, "queue_capacity", config.queue_capacity);
   config.lcm_queue_capacity = ConfigValue<int>(c, "lcm_queue_capacity", config.lcm_queue_capacity);
+  config.recover_period_s = ConfigValue<double>(c, "recover_period_s", config.recover_period_s);
+  config.recover_window_s = ConfigValue<double>(c, "recover_window_s", config.recover_window_s);
   return config;
 }
 
@@ -101,9 +103,14 @@ void LoggerService::WriterLoop() {
     }
     drained_.notify_all();
     const auto now = std::chrono::steady_clock::now();
-    if (now - last_summary > std::chrono::milliseconds(500)) {
+    if (now - last_summary > std::chrono::milliseconds(static_cast<int>(config_.recover_period_s * 1000))) {
       last_summary = now;
-      try { UpdateSummary(store); } catch (...) { ++transport_.counters().handler_errors; }
+      try {
+        RecoverLosses(store);
+        UpdateSummary(store);
+      } catch (...) {
+        ++transport_.counters().handler_errors;
+      }
     }
   }
 }
@@ -189,6 +196,25 @@ void LoggerService::Replay(ExperimentStore& store, const Item& item) {
   transport_.PublishMessage(Channel(request.rig_id, ChannelKind::kReplayDone), done);
 }
 
+// Blocks lost between the rig and us: once the rig reports the experiment ended (and so its
+// blocks_total), ask the rig to re-send what is missing (it keeps recent experiments).
+void LoggerService::RecoverLosses(ExperimentStore& store) {
+  const int64_t now = NowMicros();
+  for (const StoredExperiment& e : store.Experiments()) {
+    if (!e.ended || e.blocks_stored >= e.blocks_total) continue;
+    if (now - e.updated_utime > static_cast<int64_t>(config_.recover_window_s * 1e6)) continue;
+    replay_request_t request{};
+    request.utime = now;
+    request.replay_id = ++recovery_requests_;
+    request.requester = "logger";
+    request.rig_id = e.rig_id;
+    request.experiment_id = e.experiment_id;
+    for (int64_t seq : store.BlockSeqs(e.rig_id, e.experiment_id)) request.have_seqs.push_back(seq);
+    request.n_have = static_cast<int32_t>(request.have_seqs.size());
+    transport_.PublishMessage(Channel(e.rig_id, ChannelKind::kRigReplayRequest), request);
+  }
+}
+
 void LoggerService::UpdateSummary(ExperimentStore& store) {
   nlohmann::json list = nlohmann::json::array();
   auto experiments = store.Experiments();
@@ -225,6 +251,7 @@ nlohmann::json LoggerService::Details() {
   d["stored_commands"] = stored_commands_.load();
   d["duplicates"] = duplicates_.load();
   d["replays"] = replays_.load();
+  d["recovery_requests"] = recovery_requests_.load();
   std::lock_guard<std::mutex> lock(summary_mutex_);
   d["experiments"] = summary_;
   return d;

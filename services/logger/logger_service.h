@@ -25,6 +25,8 @@ struct LoggerConfig {
   size_t queue_capacity = 200000;  // messages waiting for the writer
   int lcm_queue_capacity = 100000; // LCM per-subscription queue
   int replay_pause_every = 200;    // blocks; pause 2 ms to let receivers drain
+  double recover_period_s = 0.5;   // ask the rig again for lost blocks this often
+  double recover_window_s = 60.0;  // ... for experiments ended less than this ago
   static LoggerConfig FromJson(const nlohmann::json& config);
 };
 
@@ -50,6 +52,7 @@ class LoggerService {
   void Store(ExperimentStore& store, const Item& item);
   void Replay(ExperimentStore& store, const Item& item);
   void UpdateSummary(ExperimentStore& store);
+  void RecoverLosses(ExperimentStore& store);
 
   Transport& transport_;
   LoggerConfig config_;
@@ -61,6 +64,7 @@ class LoggerService {
   size_t in_flight_ = 0;
   std::atomic<int64_t> stored_blocks_{0}, stored_commands_{0}, duplicates_{0}, replays_{0};
   std::atomic<size_t> peak_queue_{0};
+  std::atomic<int64_t> recovery_requests_{0};
   std::mutex summary_mutex_;
   nlohmann::json summary_ = nlohmann::json::array();
   std::thread writer_;

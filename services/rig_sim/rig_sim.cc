@@ -1,6 +1,9 @@
 #include "services/rig_sim/rig_sim.h"
 
 #include <cmath>
+#include <set>
+
+#include <idrig/replay_request_t.hpp>
 
 #include "core/io/model_json.h"
 #include "core/transport/channels.h"
@@ -46,6 +49,22 @@ RigSim::RigSim(Transport& transport, RigSimConfig config)
   transport_.Subscribe(Channel(config_.rig_id, ChannelKind::kCommand),
                        [this](const std::string&, const uint8_t* d, size_t n) { OnCommand(d, n); },
                        10000);
+  transport_.Subscribe(Channel(config_.rig_id, ChannelKind::kRigReplayRequest),
+                       [this](const std::string&, const uint8_t* d, size_t n) { OnReplayRequest(d, n); },
+                       100);
+}
+
+void RigSim::OnReplayRequest(const uint8_t* data, size_t size) {
+  replay_request_t request;
+  if (!Decode(data, size, &request, &transport_.counters(), 65536)) return;
+  auto sent = sent_blocks_.find(request.experiment_id);
+  if (request.rig_id != config_.rig_id || sent == sent_blocks_.end()) return;
+  const std::set<int64_t> have(request.have_seqs.begin(), request.have_seqs.end());
+  for (size_t seq = 0; seq < sent->second.size(); ++seq) {
+    if (have.count(static_cast<int64_t>(seq))) continue;
+    transport_.Publish(meas_channel_, sent->second[seq].data(), sent->second[seq].size());
+    ++resent_blocks_;
+  }
 }
 
 void RigSim::OnCommand(const uint8_t* data, size_t size) {
@@ -177,7 +196,13 @@ void RigSim::FlushBlock() {
     block.u[i] = {e.block_u[i]};
     block.y[i] = {e.block_y[i]};
   }
-  transport_.PublishMessage(meas_channel_, block);
+  std::vector<uint8_t> bytes(block.getEncodedSize());
+  block.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  transport_.Publish(meas_channel_, bytes.data(), bytes.size());
+  auto& kept = sent_blocks_[block.experiment_id];
+  kept.push_back(std::move(bytes));
+  while (static_cast<int>(sent_blocks_.size()) > config_.keep_experiments)
+    sent_blocks_.erase(sent_blocks_.begin());  // experiment ids grow with time
   e.block_u.clear();
   e.block_y.clear();
 }
@@ -225,6 +250,7 @@ nlohmann::json RigSim::Details() const {
   d["applied_input"] = last_u_;
   d["safe"] = !experiment_.has_value();
   d["last_refusal"] = last_refusal_;
+  d["resent_blocks"] = resent_blocks_;
   if (experiment_)
     d["experiment"] = {{"experiment_id", experiment_->status.experiment_id},
                        {"samples", experiment_->next_sample},

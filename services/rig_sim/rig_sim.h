@@ -33,6 +33,7 @@ struct RigSimConfig {
   double watchdog_s = 1.0;         // no command for this long -> safe input, experiment aborted
   double safe_input = 0.0;         // [actuator units]
   int block_samples = 100;         // samples per measurement block (< 60 KB)
+  int keep_experiments = 4;        // experiments whose blocks are kept for re-sending
   std::map<int32_t, HmacKey> keys;  // accepted keys by key id
   double status_period_s = 0.5;
   // Keys: "rig_id", "model_file" or "model" (idrig.model/1), "noise_std", "seed", "max_abs",
@@ -63,6 +64,7 @@ class RigSim {
     int64_t command_gaps = 0;  // samples held because commands were lost
   };
   void OnCommand(const uint8_t* data, size_t size);
+  void OnReplayRequest(const uint8_t* data, size_t size);
   void StartExperiment(const actuator_command_t& command);
   void ApplySample(double u);
   void FlushBlock();
@@ -79,6 +81,9 @@ class RigSim {
   std::optional<Experiment> experiment_;
   std::deque<experiment_status_t> recent_;
   std::map<int64_t, bool> ended_ids_;
+  // Encoded blocks of the recent experiments, re-sent when the logger reports a loss.
+  std::map<int64_t, std::vector<std::vector<uint8_t>>> sent_blocks_;
+  int64_t resent_blocks_ = 0;
   double last_u_ = 0.0;
   int64_t status_seq_ = 0, last_status_us_ = 0;
   std::string last_refusal_;

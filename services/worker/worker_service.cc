@@ -277,12 +277,9 @@ void WorkerService::OnReplayDone(const uint8_t* data, size_t size) {
   replayed_blocks_ += done.n_sent;
   if (done.ended) blocks_total_[{done.rig_id, done.experiment_id}] = done.blocks_total;
   job_->logger_complete = done.complete;
-  if (done.ended && !done.complete) {
-    Fail("the logger's record of experiment " + std::to_string(done.experiment_id) + " lacks " +
-         std::to_string(done.n_missing) + " block(s), e.g. seq " +
-         (done.missing_seqs.empty() ? std::string("?") : std::to_string(done.missing_seqs[0])));
-    return;
-  }
+  if (done.ended && !done.complete)
+    last_message_ = "the logger's record of experiment " + std::to_string(done.experiment_id) +
+                    " lacks " + std::to_string(done.n_missing) + " block(s) (it is recovering them)";
   if (HaveCompleteRecord(*job_)) StartCompute();
   // Otherwise Tick() asks again after replay_retry_s (experiment still running, or replayed
   // blocks lost on the way).
