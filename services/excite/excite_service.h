@@ -46,7 +46,7 @@ class ExciteService {
 
  private:
   struct Active {
-    experiment_status_t status;
+    experiment_status_t status{};
     std::unique_ptr<ExcitationGenerator> generator;
     double speed = 1.0;
     int64_t start_wall_us = 0;

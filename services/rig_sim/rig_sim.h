@@ -52,7 +52,7 @@ class RigSim {
 
  private:
   struct Experiment {
-    experiment_status_t status;
+    experiment_status_t status{};
     StateSpace discrete;
     Eigen::VectorXd x;
     std::deque<double> delay_line;  // whole-sample input delay

@@ -59,7 +59,7 @@ class WorkerService {
   using ExperimentKey = std::pair<std::string, int64_t>;
   enum class Phase { kFetching, kComputing, kPublishing };
   struct Job {
-    identify_request_t request;
+    identify_request_t request{};
     int attempt = 0;
     Phase phase = Phase::kFetching;
     int64_t start_us = 0, last_renew_us = 0, last_replay_us = 0, last_publish_us = 0;
@@ -67,7 +67,7 @@ class WorkerService {
     int replays = 0;
     bool logger_complete = false;
     std::future<model_result_t> future;
-    model_result_t result;
+    model_result_t result{};
   };
   void OnRequest(const uint8_t* data, size_t size);
   void OnClaim(const uint8_t* data, size_t size);
