@@ -5,7 +5,18 @@
 #include <fstream>
 #include <stdexcept>
 
+#include <unistd.h>
+
+#include "core/transport/transport.h"
+
 namespace idrig {
+
+std::unique_ptr<Transport> MakeServiceTransport(const std::string& url, double receive_loss) {
+  auto transport = MakeLcmTransport(url);
+  if (receive_loss <= 0) return transport;
+  return MakeLossyTransport(std::move(transport), receive_loss, static_cast<uint64_t>(getpid()));
+}
+
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
 void OnSignal(int) { g_stop = 1; }

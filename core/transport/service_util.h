@@ -1,9 +1,16 @@
 #pragma once
 // Small helpers shared by the service mains: stop on SIGINT/SIGTERM, JSON config files.
 #include <nlohmann/json.hpp>
+#include <memory>
 #include <string>
 
 namespace idrig {
+
+class Transport;
+// The transport of a service process: LCM on `url`, wrapped to drop the fraction
+// `receive_loss` of received messages when it is > 0 (config key "receive_loss", or --loss:
+// a lossy network for tests where tc netem is not available). Seeded from the pid.
+std::unique_ptr<Transport> MakeServiceTransport(const std::string& url, double receive_loss);
 
 // Installs SIGINT/SIGTERM handlers that set a flag read by StopRequested().
 void InstallStopSignals();

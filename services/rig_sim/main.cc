@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "core/transport/service_util.h"
+#include "core/transport/transport.h"
 #include "services/rig_sim/rig_sim.h"
 
 int main(int argc, char** argv) {
@@ -14,6 +15,8 @@ int main(int argc, char** argv) {
   app.add_option("--rig", rig, "rig id");
   app.add_option("--key-file", key_file, "HMAC key file");
   app.add_option("--model", model_file, "plant model (idrig.model/1 JSON)");
+  double loss = -1;
+  app.add_option("--loss", loss, "drop this fraction of received messages (tests of a lossy network)");
   CLI11_PARSE(app, argc, argv);
   try {
     nlohmann::json config = idrig::ReadJsonConfig(config_file);
@@ -21,7 +24,7 @@ int main(int argc, char** argv) {
     if (!key_file.empty()) config["key_file"] = key_file;
     if (!model_file.empty()) config["model_file"] = model_file;
     if (url.empty()) url = idrig::ConfigValue<std::string>(config, "lcm_url", "");
-    auto transport = idrig::MakeLcmTransport(url);
+    auto transport = idrig::MakeServiceTransport(url, loss >= 0 ? loss : idrig::ConfigValue<double>(config, "receive_loss", 0.0));
     idrig::RigSim rig_sim(*transport, idrig::RigSimConfig::FromJson(config));
     idrig::InstallStopSignals();
     while (!idrig::StopRequested()) rig_sim.Poll(20);

@@ -286,7 +286,8 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
   std::cout << "[2/4] experiments on rig " << rig << " (simulated time x" << speed << "):\n";
   for (auto& e : experiments) {
     e.id = NewId();
-    client.StartExperiment(rig, e.id, e.spec, e.fs, e.duration, speed, 0.0);
+    const int64_t request_id = client.StartExperiment(rig, e.id, e.spec, e.fs, e.duration, speed, 0.0);
+    auto last_request = std::chrono::steady_clock::now();
     const auto deadline = std::chrono::steady_clock::now() +
                           std::chrono::duration<double>(e.duration / speed + 20.0);
     int last_percent = -1;
@@ -296,6 +297,11 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
       const auto* rs = client.ExperimentStatus(rig, e.id, "rig");
       if (ex && ex->state == experiment_status_t::STATE_FAILED)
         throw std::runtime_error("experiment refused: " + ex->message);
+      if (!ex && std::chrono::steady_clock::now() - last_request > std::chrono::seconds(1)) {
+        // Not heard of yet (request lost?): the same request again (idempotent by request id).
+        client.StartExperiment(rig, e.id, e.spec, e.fs, e.duration, speed, 0.0, request_id);
+        last_request = std::chrono::steady_clock::now();
+      }
       const int64_t total = ex ? ex->samples_total : 0;
       const int64_t done = rs ? rs->samples_done : 0;
       const int percent = total > 0 ? static_cast<int>(100 * done / total) : 0;
@@ -436,12 +442,16 @@ void RegisterServiceCommands(CLI::App& app) {
       ValidateRigId(args->rig);
       ServiceClient client(args->url);
       const int64_t id = args->experiment > 0 ? args->experiment : NewId();
-      client.StartExperiment(args->rig, id, args->signal, args->fs, args->duration, args->speed, args->max_abs);
+      const int64_t request_id = client.StartExperiment(args->rig, id, args->signal, args->fs,
+                                                        args->duration, args->speed, args->max_abs);
       std::cout << id << "\n" << std::flush;
       if (!args->wait) return;
       for (int i = 0; i < 100000; ++i) {
         client.Spin(200);
         const auto* ex = client.ExperimentStatus(args->rig, id, "excite");
+        if (!ex && i % 5 == 4)  // not heard of yet: the same request again (idempotent)
+          client.StartExperiment(args->rig, id, args->signal, args->fs, args->duration,
+                                 args->speed, args->max_abs, request_id);
         const auto* rs = client.ExperimentStatus(args->rig, id, "rig");
         if (ex && ex->state == experiment_status_t::STATE_FAILED)
           throw std::invalid_argument("experiment refused: " + ex->message);

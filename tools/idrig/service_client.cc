@@ -78,10 +78,10 @@ const char* ExperimentStateName(int32_t state) {
 
 int64_t ServiceClient::StartExperiment(const std::string& rig, int64_t experiment_id,
                                        const std::string& spec, double fs, double duration_s,
-                                       double speed, double max_abs) {
+                                       double speed, double max_abs, int64_t request_id) {
   experiment_request_t r{};
   r.utime = NowMicros();
-  r.request_id = NewId();
+  r.request_id = request_id > 0 ? request_id : NewId();
   r.rig_id = rig;
   r.experiment_id = experiment_id;
   r.action = experiment_request_t::ACTION_START;

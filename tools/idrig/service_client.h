@@ -26,7 +26,8 @@ class ServiceClient {
   void Spin(int ms);
 
   int64_t StartExperiment(const std::string& rig, int64_t experiment_id, const std::string& spec,
-                          double fs, double duration_s, double speed, double max_abs);
+                          double fs, double duration_s, double speed, double max_abs,
+                          int64_t request_id = 0);
   void StopExperiment(const std::string& rig, int64_t experiment_id);
   void RequestIdentify(const std::string& rig, int64_t request_id, int64_t experiment_id,
                        const std::string& method, const std::string& options_json);
