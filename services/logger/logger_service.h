@@ -20,6 +20,15 @@
 
 namespace idrig {
 
+// The index fields of an encoded measurement_block_t, read without decoding the samples.
+struct MeasurementHeader {
+  std::string rig_id;
+  int64_t utime = 0, experiment_id = 0, seq = 0, first_sample = 0;
+  int32_t n_samples = 0;
+};
+// false for another type or a truncated message.
+bool PeekMeasurementHeader(const uint8_t* data, size_t size, MeasurementHeader* header);
+
 struct LoggerConfig {
   std::string db_path = "idrig-experiments.db";
   size_t queue_capacity = 200000;  // messages waiting for the writer
