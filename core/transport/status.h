@@ -16,6 +16,8 @@ class StatusReporter {
                  double period_s = 1.0);
   // Publishes when the period has elapsed since the last one (or force). Returns true if sent.
   bool Maybe(const std::string& state, const std::string& details_json, bool force = false);
+  // True when the period has elapsed (compute the details only then).
+  bool Due() const { return NowMicros() - last_utime_ >= static_cast<int64_t>(period_s_ * 1e6); }
   service_status_t Snapshot(const std::string& state, const std::string& details_json) const;
   const std::string& instance_id() const { return instance_id_; }
 

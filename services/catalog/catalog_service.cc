@@ -182,7 +182,7 @@ void CatalogService::Tick() {
       ++transport_.counters().handler_errors;
     }
   }
-  reporter_.Maybe("running", Details().dump());
+  if (reporter_.Due()) reporter_.Maybe("running", Details().dump(), true);
 }
 
 nlohmann::json CatalogService::Details() {

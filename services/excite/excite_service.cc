@@ -171,7 +171,7 @@ void ExciteService::Tick() {
     if (active_) PublishStatus(active_->status);
     if (!recent_.empty()) PublishStatus(recent_.back());
   }
-  reporter_.Maybe(active_ ? "busy" : "running", Details().dump());
+  if (reporter_.Due()) reporter_.Maybe(active_ ? "busy" : "running", Details().dump(), true);
 }
 
 void ExciteService::PublishStatus(const experiment_status_t& status) {

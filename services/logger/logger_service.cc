@@ -297,7 +297,7 @@ nlohmann::json LoggerService::Details() {
 
 void LoggerService::Poll(int timeout_ms) {
   transport_.Handle(timeout_ms);
-  reporter_.Maybe("running", Details().dump());
+  if (reporter_.Due()) reporter_.Maybe("running", Details().dump(), true);
 }
 
 }  // namespace idrig

@@ -234,7 +234,7 @@ void RigSim::Tick() {
     if (experiment_) PublishStatus(experiment_->status);
     for (const auto& s : recent_) PublishStatus(s);  // full snapshot of the recent ones
   }
-  reporter_.Maybe(experiment_ ? "busy" : "running", Details().dump());
+  if (reporter_.Due()) reporter_.Maybe(experiment_ ? "busy" : "running", Details().dump(), true);
 }
 
 void RigSim::PublishStatus(const experiment_status_t& status) {

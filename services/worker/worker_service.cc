@@ -372,7 +372,7 @@ void WorkerService::Tick() {
       SendClaim(offer->second);
     }
   }
-  reporter_.Maybe(job_ ? "busy" : "running", Details().dump());
+  if (reporter_.Due()) reporter_.Maybe(job_ ? "busy" : "running", Details().dump(), true);
 }
 
 nlohmann::json WorkerService::Details() const {

@@ -98,7 +98,7 @@ int LoggerRate(const std::string& bin, double seconds) {
   std::printf("%10s %10s %14s %14s\n", "rate/s", "sent", "idrig-logger", "lcm-logger");
   int64_t experiment = 1;
   int64_t lcm_total = 0;
-  for (int rate : {10000, 20000, 40000, 60000, 80000, 100000}) {
+  for (int rate : {5000, 10000, 20000, 30000, 40000, 50000, 60000, 80000}) {
     const int64_t n = static_cast<int64_t>(rate * seconds);
     block.experiment_id = experiment;
     const auto start = Clock::now();
