@@ -25,6 +25,7 @@ RigSimConfig RigSimConfig::FromJson(const nlohmann::json& c) {
   config.watchdog_s = ConfigValue<double>(c, "watchdog_s", config.watchdog_s);
   config.safe_input = ConfigValue<double>(c, "safe_input", config.safe_input);
   config.block_samples = ConfigValue<int>(c, "block_samples", config.block_samples);
+  config.keep_experiments = ConfigValue<int>(c, "keep_experiments", config.keep_experiments);
   config.status_period_s = ConfigValue<double>(c, "status_period_s", config.status_period_s);
   const std::string key_file = ConfigValue<std::string>(c, "key_file", "");
   if (!key_file.empty()) config.keys[ConfigValue<int32_t>(c, "key_id", 1)] = ReadKeyFile(key_file);
