@@ -500,7 +500,15 @@ void RegisterServiceCommands(CLI::App& app) {
     auto* list = group->add_subcommand("list", "models in the catalogue, oldest first");
     auto* show = group->add_subcommand("show", "one model with its lineage and metrics");
     auto* history = group->add_subcommand("history", "a parameter (pole, natural frequency, ...) over time for a rig");
-    for (auto* c : {list, show, history})
+    auto* export_cmd = group->add_subcommand("export", "write a model as idrig.model/1 JSON (with its lineage under \"identification\")");
+    auto* compare = group->add_subcommand("compare", "two models side by side: lineage and metrics");
+    auto other = std::make_shared<int64_t>(0);
+    auto out = std::make_shared<std::string>();
+    export_cmd->add_option("id", args->id, "model id")->required();
+    export_cmd->add_option("--out", *out, "file to write (default stdout)");
+    compare->add_option("id", args->id, "first model id")->required();
+    compare->add_option("other", *other, "second model id")->required();
+    for (auto* c : {list, show, history, export_cmd, compare})
       c->add_option("--db", args->db, "catalogue file (idrig-catalog's db_path)");
     request->add_option("--url", args->url, "LCM URL");
     request->add_option("--rig", args->rig, "rig id")->required();
@@ -545,6 +553,46 @@ void RegisterServiceCommands(CLI::App& app) {
       auto m = catalog.Model(args->id);
       if (!m) throw std::invalid_argument("no model " + std::to_string(args->id) + " in " + args->db);
       PrintModel(catalog, *m, args->json);
+    });
+    export_cmd->callback([args, out] {
+      Catalog catalog(args->db, true);
+      auto m = catalog.Model(args->id);
+      if (!m) throw std::invalid_argument("no model " + std::to_string(args->id) + " in " + args->db);
+      nlohmann::json j = nlohmann::json::parse(m->model_json);
+      j["identification"] = {{"model_id", m->model_id}, {"rig_id", m->rig_id},
+                             {"experiment_id", m->experiment_id}, {"signal_spec", m->signal_spec},
+                             {"method", m->method}, {"options", nlohmann::json::parse(m->options_json, nullptr, false)},
+                             {"data_hash", m->data_hash}, {"software_version", m->software_version},
+                             {"created_utime", m->created_utime}, {"fit_percent", m->fit_percent}};
+      if (out->empty()) {
+        std::cout << j.dump(2) << "\n";
+      } else {
+        std::ofstream file(*out);
+        if (!file) throw std::invalid_argument("cannot write '" + *out + "'");
+        file << j.dump(2) << "\n";
+      }
+    });
+    compare->callback([args, other] {
+      Catalog catalog(args->db, true);
+      auto a = catalog.Model(args->id), b = catalog.Model(*other);
+      if (!a || !b) throw std::invalid_argument("no model " + std::to_string(!a ? args->id : *other) + " in " + args->db);
+      const auto ma = MetricMap(catalog, a->model_id), mb = MetricMap(catalog, b->model_id);
+      std::cout << std::left << std::setw(16) << "" << std::setw(28) << ("model " + std::to_string(a->model_id))
+                << ("model " + std::to_string(b->model_id)) << "\n";
+      auto row = [](const std::string& name, const std::string& x, const std::string& y) {
+        std::cout << std::left << std::setw(16) << name << std::setw(28) << x << y << "\n";
+      };
+      row("method", a->method, b->method);
+      row("experiment", std::to_string(a->experiment_id), std::to_string(b->experiment_id));
+      row("signal", a->signal_spec.substr(0, 26), b->signal_spec.substr(0, 26));
+      row("samples", std::to_string(a->n_samples), std::to_string(b->n_samples));
+      row("data sha256", a->data_hash.substr(0, 16), b->data_hash.substr(0, 16));
+      row("stored (UTC)", TimeText(a->created_utime), TimeText(b->created_utime));
+      std::set<std::string> names;
+      for (const auto& [k, v] : ma) names.insert(k);
+      for (const auto& [k, v] : mb) names.insert(k);
+      for (const auto& n : names)
+        row(n, ma.count(n) ? Number(ma.at(n), 6) : "-", mb.count(n) ? Number(mb.at(n), 6) : "-");
     });
     history->callback([args] {
       Catalog catalog(args->db, true);
