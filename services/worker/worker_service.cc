@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <thread>
 
@@ -392,7 +393,8 @@ nlohmann::json WorkerService::Details() const {
 }
 
 void WorkerService::Poll(int timeout_ms) {
-  transport_.Handle(timeout_ms);
+  // While the compute thread runs, look at it every millisecond (no message would wake us).
+  transport_.Handle(job_ && job_->phase == Phase::kComputing ? std::min(timeout_ms, 1) : timeout_ms);
   Tick();
 }
 

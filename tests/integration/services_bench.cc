@@ -1,7 +1,7 @@
 // Service benchmarks (run by hand inside a private network namespace; see docs/services.md):
 //   services_bench logger-rate BIN_DIR [seconds]   idrig-logger vs lcm-logger, 200-byte blocks
 //   services_bench latency BIN_DIR [samples]       end of experiment -> model stored
-//   services_bench jobs BIN_DIR WORKERS [jobs]     identification jobs per second
+//   services_bench jobs BIN_DIR WORKERS [jobs] [heavy]   identification jobs per second
 #include <fcntl.h>
 #include <signal.h>
 #include <sys/stat.h>
@@ -242,20 +242,23 @@ int Latency(const std::string& bin, int64_t samples) {
   return 0;
 }
 
-int Jobs(const std::string& bin, int workers, int jobs) {
+int Jobs(const std::string& bin, int workers, int jobs, bool heavy) {
+  // light: arx on 511 samples (a few ms); heavy: arx-oe on 5110 samples (tens of ms).
+  const double fs = heavy ? 100.0 : 10.0;
+  const std::string method = heavy ? "arx-oe" : "arx";
   Cluster cluster(bin, "jobs" + std::to_string(workers), workers, 100, 50);
   Client c;
   if (!Until(*c.t, [&] { return static_cast<int>(c.services.size()) >= 4 + workers; }, 10)) return 1;
-  c.Experiment(77, "prbs:bits=9,amp=1", 10.0, 51.1, 200.0);
+  c.Experiment(77, "prbs:bits=9,amp=1", fs, 51.1, heavy ? 1000.0 : 200.0);
   if (!Until(*c.t, [&] { return c.rig.experiment_id == 77 && c.rig.state == experiment_status_t::STATE_DONE; }, 20)) return 1;
   Until(*c.t, [] { return false; }, 0.5);
   const auto start = Clock::now();
-  for (int j = 0; j < jobs; ++j) c.Identify(5000 + j, 77, "arx", "{\"order\":3}");
+  for (int j = 0; j < jobs; ++j) c.Identify(5000 + j, 77, method, "{\"order\":3}");
   auto last = Clock::now();
   const bool ok = Until(*c.t, [&] {
     if (Clock::now() - last > std::chrono::seconds(2)) {  // re-send lost requests
       for (int j = 0; j < jobs; ++j)
-        if (!c.acks.count(5000 + j)) c.Identify(5000 + j, 77, "arx", "{\"order\":3}");
+        if (!c.acks.count(5000 + j)) c.Identify(5000 + j, 77, method, "{\"order\":3}");
       last = Clock::now();
     }
     return static_cast<int>(c.acks.size()) >= jobs;
@@ -263,8 +266,8 @@ int Jobs(const std::string& bin, int workers, int jobs) {
   const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
   std::map<std::string, int> per_worker;
   for (const auto& [id, a] : c.ack_messages) ++per_worker[a.worker_id];
-  std::printf("%d worker(s): %d jobs (arx, 511 samples) in %.2f s = %.1f jobs/s%s;", workers, jobs, elapsed,
-              jobs / elapsed, ok ? "" : " (INCOMPLETE)");
+  std::printf("%d worker(s): %d jobs (%s, %d samples) in %.2f s = %.1f jobs/s%s;", workers, jobs, method.c_str(),
+              static_cast<int>(fs * 51.1 + 0.5), elapsed, jobs / elapsed, ok ? "" : " (INCOMPLETE)");
   for (const auto& [w, n] : per_worker) std::printf(" %s %d", w.c_str(), n);
   Catalog catalog(cluster.dir + "/catalog.db", true);
   std::printf("; models stored %lld\n", static_cast<long long>(catalog.CountModels()));
@@ -280,7 +283,9 @@ int main(int argc, char** argv) {
   const std::string mode = argv[1], bin = argv[2];
   if (mode == "logger-rate") return LoggerRate(bin, argc > 3 ? std::stod(argv[3]) : 2.0);
   if (mode == "latency") return Latency(bin, argc > 3 ? std::stoll(argv[3]) : 100000);
-  if (mode == "jobs") return Jobs(bin, argc > 3 ? std::stoi(argv[3]) : 1, argc > 4 ? std::stoi(argv[4]) : 40);
+  if (mode == "jobs")
+    return Jobs(bin, argc > 3 ? std::stoi(argv[3]) : 1, argc > 4 ? std::stoi(argv[4]) : 40,
+                argc > 5 && std::string(argv[5]) == "heavy");
   std::fprintf(stderr, "unknown mode %s\n", mode.c_str());
   return 2;
 }

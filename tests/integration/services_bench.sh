@@ -7,4 +7,6 @@ unshare -n sh -c 'ip link set lo up multicast on && ip route add 224.0.0.0/4 dev
   "$0/services_bench" logger-rate "$0" 2 &&
   "$0/services_bench" latency "$0" 100000 &&
   "$0/services_bench" jobs "$0" 1 40 &&
-  "$0/services_bench" jobs "$0" 2 40' "$bin"
+  "$0/services_bench" jobs "$0" 2 40 &&
+  "$0/services_bench" jobs "$0" 1 40 heavy &&
+  "$0/services_bench" jobs "$0" 2 40 heavy' "$bin"
