@@ -196,6 +196,34 @@ TEST(Pipeline, ExperimentToModelsInTheCatalogue) {
   EXPECT_EQ(done, 2);
 }
 
+TEST(Pipeline, BadRequestsFailWithAMessage) {
+  Pipeline p(MakeLcmTransport("memq://"), "bad_requests");
+  Catalog reader(p.catalog_path);
+  // An over-limit signal (amp 3 > max_abs 2) is refused before anything moves.
+  StartExperiment(*p.transport, 201, "step:amp=3", 5.0, 10.0);
+  auto refused = [&] {
+    for (const auto& e : reader.Experiments("rig-t"))
+      if (e.experiment_id == 201 && e.state == "failed") return true;
+    return false;
+  };
+  ASSERT_TRUE(p.RunUntil(refused, 5.0));
+  EXPECT_FALSE(p.rig->running());
+  // A good experiment, then a job with an unknown method: the job fails, naming the methods.
+  StartExperiment(*p.transport, 202, "prbs:bits=6,amp=1", 5.0, 12.6);
+  auto done = [&] {
+    for (const auto& e : reader.Experiments("rig-t"))
+      if (e.experiment_id == 202 && e.state == "done") return true;
+    return false;
+  };
+  ASSERT_TRUE(p.RunUntil(done, 10.0));
+  RequestModel(*p.transport, 9100, 202, "no-such-method", "{}");
+  ASSERT_TRUE(p.RunUntil([&] { auto j = reader.Job(9100); return j && j->state == "failed"; }, 10.0));
+  EXPECT_NE(reader.Job(9100)->message.find("unknown method 'no-such-method'"), std::string::npos)
+      << reader.Job(9100)->message;
+  EXPECT_NE(reader.Job(9100)->message.find("arx-oe"), std::string::npos);
+  EXPECT_EQ(reader.CountModels(), 0);
+}
+
 TEST(Pipeline, FivePercentLossStillGivesCompleteDataAndOneModelPerRequest) {
   // 103 blocks of 10 samples: the logger and the workers each lose about 5 of them.
   Pipeline p(MakeLossyTransport(MakeLcmTransport("memq://"), 0.05, 12345), "lossy", 10);
