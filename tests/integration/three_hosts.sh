@@ -23,7 +23,7 @@ fail() { echo "FAIL: $*"; cat "$dir/out.txt"; exit 1; }
 q() { sqlite3 -batch -noheader "$dir/$1" "$2"; }
 [ "$(q catalog.db 'SELECT count(*) FROM models')" = 2 ] || fail "models: $(q catalog.db 'SELECT count(*) FROM models')"
 [ "$(q catalog.db 'SELECT count(DISTINCT request_id) FROM models')" = 2 ] || fail "duplicate request"
-[ "$(q catalog.db 'SELECT count(DISTINCT worker_id) > 0 FROM models WHERE worker_id LIKE "h3-worker-%"')" = 1 ] || fail "workers"
+[ "$(q catalog.db 'SELECT count(DISTINCT worker_id) > 0 FROM models WHERE worker_id LIKE '\''h3-worker-%'\''')" = 1 ] || fail "workers"
 [ "$(q catalog.db "SELECT count(*) FROM models m JOIN experiments e USING (rig_id, experiment_id)
                     WHERE m.n_samples = e.samples_total AND e.samples_total = 511")" = 2 ] || fail "lineage / sample count"
 blocks_total=$(q catalog.db 'SELECT blocks_total FROM experiments')
