@@ -37,6 +37,7 @@ fail() { echo "FAIL: $*"; cat "$dir/out.txt"; exit 1; }
 # The command line reads the same catalogue.
 "$idrig" models list --db "$db" | grep -q finite-frequency || fail "models list"
 "$idrig" models show 1 --db "$db" --json | grep -q '"data_hash"' || fail "models show"
-"$idrig" models history --db "$db" --rig sim1 --param wn_1 | grep -q "model" || fail "models history"
+"$idrig" models history --db "$db" --rig sim1 --param wn_1 --svg "$dir/h.svg" | grep -q "model" || fail "models history"
+grep -q "<polyline" "$dir/h.svg" || fail "history plot"
 grep -q "\[4/4\]" "$dir/out.txt" || fail "demo output"
 echo "demo end-to-end: ok"

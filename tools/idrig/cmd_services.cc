@@ -166,6 +166,40 @@ void PrintHistory(Catalog& catalog, const std::string& rig, const std::string& m
   }
 }
 
+// The history as an SVG line plot (value against storage time), for a browser or a report.
+void WriteHistorySvg(Catalog& catalog, const std::string& rig, const std::string& metric,
+                     const std::string& method, const std::string& path) {
+  const auto history = catalog.History(rig, metric, method);
+  if (history.empty()) throw std::invalid_argument("no model of rig '" + rig + "' has metric '" + metric + "'");
+  double t0 = history.front().first.created_utime * 1e-6, t1 = history.back().first.created_utime * 1e-6;
+  double lo = history[0].second, hi = lo;
+  for (const auto& h : history) {
+    lo = std::min(lo, h.second);
+    hi = std::max(hi, h.second);
+  }
+  if (hi - lo < 1e-12) { lo -= 0.5; hi += 0.5; }
+  if (t1 - t0 < 1e-6) t1 = t0 + 1.0;
+  const double w = 640, h = 320, m = 50;
+  auto x = [&](double t) { return m + (w - 2 * m) * (t - t0) / (t1 - t0); };
+  auto y = [&](double v) { return h - m - (h - 2 * m) * (v - lo) / (hi - lo); };
+  std::ofstream out(path);
+  if (!out) throw std::invalid_argument("cannot write '" + path + "'");
+  out << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h << "'>\n"
+      << "<rect width='100%' height='100%' fill='white'/>\n"
+      << "<text x='" << m << "' y='20' font-family='sans-serif' font-size='14'>" << metric << " of rig " << rig
+      << (method.empty() ? "" : " (" + method + ")") << ", " << TimeText(history.front().first.created_utime)
+      << " .. " << TimeText(history.back().first.created_utime) << " UTC</text>\n"
+      << "<text x='5' y='" << y(hi) + 4 << "' font-size='11'>" << Number(hi) << "</text>\n"
+      << "<text x='5' y='" << y(lo) + 4 << "' font-size='11'>" << Number(lo) << "</text>\n"
+      << "<polyline fill='none' stroke='steelblue' stroke-width='1.5' points='";
+  for (const auto& [model, value] : history) out << x(model.created_utime * 1e-6) << "," << y(value) << " ";
+  out << "'/>\n";
+  for (const auto& [model, value] : history)
+    out << "<circle cx='" << x(model.created_utime * 1e-6) << "' cy='" << y(value) << "' r='3' fill='steelblue'>"
+        << "<title>model " << model.model_id << " " << model.method << ": " << Number(value, 6) << "</title></circle>\n";
+  out << "</svg>\n";
+}
+
 bool MulticastWorks(const std::string& url) {
   try {
     auto t = MakeLcmTransport(url);
@@ -524,6 +558,8 @@ void RegisterServiceCommands(CLI::App& app) {
     history->add_option("--param", args->param,
                         "metric: wn_k, zeta_k, pole_k_re, pole_k_im, dc_gain, fit_percent, order");
     history->add_option("--method", args->method, "only this method");
+    auto svg = std::make_shared<std::string>();
+    history->add_option("--svg", *svg, "also write the plot as an SVG file");
     request->callback([args] {
       ValidateRigId(args->rig);
       if (nlohmann::json::parse(args->options, nullptr, false).is_discarded())
@@ -594,9 +630,10 @@ void RegisterServiceCommands(CLI::App& app) {
       for (const auto& n : names)
         row(n, ma.count(n) ? Number(ma.at(n), 6) : "-", mb.count(n) ? Number(mb.at(n), 6) : "-");
     });
-    history->callback([args] {
+    history->callback([args, svg] {
       Catalog catalog(args->db, true);
       PrintHistory(catalog, args->rig, args->param, args->method);
+      if (!svg->empty()) WriteHistorySvg(catalog, args->rig, args->param, args->method, *svg);
     });
   }
   // ---- status
