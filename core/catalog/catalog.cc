@@ -95,27 +95,31 @@ Catalog::Catalog(const std::string& path, bool read_only) : db_(path, read_only)
 }
 
 void Catalog::TouchRig(const std::string& rig_id, int64_t utime) {
-  SqliteStatement s(db_,
-                    "INSERT INTO rigs(rig_id, first_seen_utime, last_seen_utime) VALUES(?1, ?2, ?2) "
-                    "ON CONFLICT(rig_id) DO UPDATE SET last_seen_utime = "
-                    "max(last_seen_utime, excluded.last_seen_utime)");
+  SqliteStatement s(
+      db_,
+      "INSERT INTO rigs(rig_id, first_seen_utime, last_seen_utime) VALUES(?1, ?2, ?2) "
+      "ON CONFLICT(rig_id) DO UPDATE SET last_seen_utime = "
+      "max(last_seen_utime, excluded.last_seen_utime)");
   s.Bind(1, rig_id).Bind(2, utime).Run();
 }
 
 void Catalog::UpsertExperiment(const ExperimentRecord& e) {
   TouchRig(e.rig_id, e.start_utime > 0 ? e.start_utime : e.end_utime);
-  SqliteStatement s(db_,
-                    "INSERT INTO experiments(rig_id, experiment_id, signal_spec, sample_rate_hz, "
-                    "samples_total, blocks_total, state, start_utime, end_utime) "
-                    "VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9) "
-                    "ON CONFLICT(rig_id, experiment_id) DO UPDATE SET "
-                    "signal_spec = CASE WHEN excluded.signal_spec <> '' THEN excluded.signal_spec ELSE signal_spec END, "
-                    "sample_rate_hz = CASE WHEN excluded.sample_rate_hz > 0 THEN excluded.sample_rate_hz ELSE sample_rate_hz END, "
-                    "samples_total = max(samples_total, excluded.samples_total), "
-                    "blocks_total = max(blocks_total, excluded.blocks_total), "
-                    "state = excluded.state, "
-                    "start_utime = CASE WHEN start_utime = 0 THEN excluded.start_utime ELSE start_utime END, "
-                    "end_utime = max(end_utime, excluded.end_utime)");
+  SqliteStatement s(
+      db_,
+      "INSERT INTO experiments(rig_id, experiment_id, signal_spec, sample_rate_hz, "
+      "samples_total, blocks_total, state, start_utime, end_utime) "
+      "VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9) "
+      "ON CONFLICT(rig_id, experiment_id) DO UPDATE SET "
+      "signal_spec = CASE WHEN excluded.signal_spec <> '' THEN excluded.signal_spec ELSE "
+      "signal_spec END, "
+      "sample_rate_hz = CASE WHEN excluded.sample_rate_hz > 0 THEN excluded.sample_rate_hz ELSE "
+      "sample_rate_hz END, "
+      "samples_total = max(samples_total, excluded.samples_total), "
+      "blocks_total = max(blocks_total, excluded.blocks_total), "
+      "state = excluded.state, "
+      "start_utime = CASE WHEN start_utime = 0 THEN excluded.start_utime ELSE start_utime END, "
+      "end_utime = max(end_utime, excluded.end_utime)");
   s.Bind(1, e.rig_id).Bind(2, e.experiment_id).Bind(3, e.signal_spec).Bind(4, e.sample_rate_hz);
   s.Bind(5, e.samples_total).Bind(6, e.blocks_total).Bind(7, e.state).Bind(8, e.start_utime);
   s.Bind(9, e.end_utime).Run();
@@ -231,8 +235,8 @@ std::vector<JobRecord> Catalog::JobsToOffer(int64_t now) {
   return out;
 }
 
-void Catalog::FailJob(int64_t request_id, const std::string& worker_id,
-                      const std::string& message, int64_t utime) {
+void Catalog::FailJob(int64_t request_id, const std::string& worker_id, const std::string& message,
+                      int64_t utime) {
   SqliteStatement s(db_,
                     "UPDATE jobs SET state = 'failed', worker_id = ?2, message = ?3, "
                     "finished_utime = ?4 WHERE request_id = ?1 AND state <> 'done' AND "
@@ -259,8 +263,10 @@ std::pair<int64_t, bool> Catalog::StoreModel(const ModelRecord& m,
   insert.Bind(5, m.options_json).Bind(6, m.data_hash).Bind(7, m.n_samples);
   insert.Bind(8, m.sample_time_s).Bind(9, m.software_version).Bind(10, m.worker_id);
   insert.Bind(11, m.created_utime).Bind(12, m.compute_s);
-  if (std::isfinite(m.fit_percent)) insert.Bind(13, m.fit_percent);
-  else insert.BindNull(13);
+  if (std::isfinite(m.fit_percent))
+    insert.Bind(13, m.fit_percent);
+  else
+    insert.BindNull(13);
   insert.Bind(14, m.status).Bind(15, m.model_json).Bind(16, m.report_json).Run();
   const int64_t model_id = db_.LastInsertRowId();
   SqliteStatement metric(db_,
@@ -379,8 +385,10 @@ std::pair<int64_t, bool> Catalog::StoreDiagnosis(int64_t request_id, const std::
                     "INSERT INTO diagnosis_reports(request_id, rig_id, model_id, experiment_id, "
                     "created_utime, report_json) VALUES(?1, ?2, ?3, ?4, ?5, ?6)");
   s.Bind(1, request_id).Bind(2, rig_id);
-  if (model_id > 0) s.Bind(3, model_id);
-  else s.BindNull(3);
+  if (model_id > 0)
+    s.Bind(3, model_id);
+  else
+    s.BindNull(3);
   s.Bind(4, experiment_id).Bind(5, utime).Bind(6, report_json).Run();
   const int64_t id = db_.LastInsertRowId();
   tx.Commit();

@@ -52,9 +52,10 @@ ExperimentStore::ExperimentStore(const std::string& path)
       insert_block_(Prepared(db_),
                     "INSERT OR IGNORE INTO blocks(rig_id, experiment_id, seq, first_sample, "
                     "n_samples, utime, recv_utime, data) VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)"),
-      insert_command_(db_,
-                      "INSERT OR IGNORE INTO commands(rig_id, experiment_id, seq, first_sample, "
-                      "n_samples, utime, recv_utime, data) VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)") {}
+      insert_command_(
+          db_,
+          "INSERT OR IGNORE INTO commands(rig_id, experiment_id, seq, first_sample, "
+          "n_samples, utime, recv_utime, data) VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)") {}
 
 void ExperimentStore::Begin() { db_.Exec("BEGIN"); }
 void ExperimentStore::Commit() { db_.Exec("COMMIT"); }
@@ -86,8 +87,10 @@ void ExperimentStore::UpdateExperiment(const StoredExperiment& e) {
                     "ended, blocks_total, samples_total, updated_utime) "
                     "VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8) "
                     "ON CONFLICT(rig_id, experiment_id) DO UPDATE SET "
-                    "signal_spec = CASE WHEN excluded.signal_spec <> '' THEN excluded.signal_spec ELSE signal_spec END, "
-                    "sample_rate_hz = CASE WHEN excluded.sample_rate_hz > 0 THEN excluded.sample_rate_hz ELSE sample_rate_hz END, "
+                    "signal_spec = CASE WHEN excluded.signal_spec <> '' THEN excluded.signal_spec "
+                    "ELSE signal_spec END, "
+                    "sample_rate_hz = CASE WHEN excluded.sample_rate_hz > 0 THEN "
+                    "excluded.sample_rate_hz ELSE sample_rate_hz END, "
                     "ended = max(ended, excluded.ended), "
                     "blocks_total = max(blocks_total, excluded.blocks_total), "
                     "samples_total = max(samples_total, excluded.samples_total), "
@@ -101,8 +104,10 @@ namespace {
 const char* kExperimentSelect =
     "SELECT e.rig_id, e.experiment_id, e.signal_spec, e.sample_rate_hz, e.ended, "
     "e.blocks_total, e.samples_total, e.updated_utime, "
-    "(SELECT count(*) FROM blocks b WHERE b.rig_id = e.rig_id AND b.experiment_id = e.experiment_id), "
-    "(SELECT count(*) FROM commands c WHERE c.rig_id = e.rig_id AND c.experiment_id = e.experiment_id) "
+    "(SELECT count(*) FROM blocks b WHERE b.rig_id = e.rig_id AND b.experiment_id = "
+    "e.experiment_id), "
+    "(SELECT count(*) FROM commands c WHERE c.rig_id = e.rig_id AND c.experiment_id = "
+    "e.experiment_id) "
     "FROM experiments e ";
 StoredExperiment ReadExperiment(const SqliteStatement& s) {
   StoredExperiment e;

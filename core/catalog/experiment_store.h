@@ -32,7 +32,7 @@ class ExperimentStore {
   explicit ExperimentStore(const std::string& path);
   static const std::vector<std::string>& Migrations();
 
-  void Begin();   // batch writes in one transaction (as rosbag2 does)
+  void Begin();  // batch writes in one transaction (as rosbag2 does)
   void Commit();
   // INSERT OR IGNORE: a duplicate (rig, experiment, seq) is kept once. Returns true if new.
   bool AddBlock(const std::string& rig_id, int64_t experiment_id, const StoredBlock& block);

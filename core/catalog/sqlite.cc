@@ -5,8 +5,7 @@
 namespace idrig {
 
 SqliteDatabase::SqliteDatabase(const std::string& path, bool read_only) : path_(path) {
-  const int flags = read_only ? SQLITE_OPEN_READONLY
-                              : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
+  const int flags = read_only ? SQLITE_OPEN_READONLY : (SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE);
   if (sqlite3_open_v2(path.c_str(), &db_, flags | SQLITE_OPEN_FULLMUTEX, nullptr) != SQLITE_OK) {
     std::string message = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
@@ -23,8 +22,8 @@ void SqliteDatabase::Exec(const std::string& constant_sql) {
   if (sqlite3_exec(db_, constant_sql.c_str(), nullptr, nullptr, &error) != SQLITE_OK) {
     std::string message = error ? error : "unknown error";
     sqlite3_free(error);
-    throw std::runtime_error("SQLite error in '" + path_ + "': " + message + " (in: " +
-                             constant_sql.substr(0, 80) + ")");
+    throw std::runtime_error("SQLite error in '" + path_ + "': " + message +
+                             " (in: " + constant_sql.substr(0, 80) + ")");
   }
 }
 
@@ -49,8 +48,8 @@ int SqliteDatabase::Migrate(const std::vector<std::string>& migrations) {
 
 SqliteStatement::SqliteStatement(SqliteDatabase& db, const char* sql) : db_(db), sql_(sql) {
   if (sqlite3_prepare_v2(db.handle(), sql, -1, &stmt_, nullptr) != SQLITE_OK)
-    throw std::runtime_error("SQLite cannot prepare '" + sql_ + "': " +
-                             sqlite3_errmsg(db.handle()));
+    throw std::runtime_error("SQLite cannot prepare '" + sql_ +
+                             "': " + sqlite3_errmsg(db.handle()));
 }
 
 SqliteStatement::~SqliteStatement() { sqlite3_finalize(stmt_); }

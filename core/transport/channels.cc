@@ -6,18 +6,30 @@ namespace idrig {
 namespace {
 const char* Suffix(ChannelKind kind) {
   switch (kind) {
-    case ChannelKind::kExperimentRequest: return "EXP_REQ";
-    case ChannelKind::kCommand: return "CMD";
-    case ChannelKind::kMeasurement: return "MEAS";
-    case ChannelKind::kExperimentStatus: return "EXP_STATUS";
-    case ChannelKind::kIdentifyRequest: return "IDENT_REQ";
-    case ChannelKind::kClaim: return "CLAIM";
-    case ChannelKind::kResult: return "RESULT";
-    case ChannelKind::kAck: return "ACK";
-    case ChannelKind::kReplayRequest: return "REPLAY_REQ";
-    case ChannelKind::kReplay: return "REPLAY";
-    case ChannelKind::kReplayDone: return "REPLAY_DONE";
-    case ChannelKind::kRigReplayRequest: return "RIG_REPLAY_REQ";
+    case ChannelKind::kExperimentRequest:
+      return "EXP_REQ";
+    case ChannelKind::kCommand:
+      return "CMD";
+    case ChannelKind::kMeasurement:
+      return "MEAS";
+    case ChannelKind::kExperimentStatus:
+      return "EXP_STATUS";
+    case ChannelKind::kIdentifyRequest:
+      return "IDENT_REQ";
+    case ChannelKind::kClaim:
+      return "CLAIM";
+    case ChannelKind::kResult:
+      return "RESULT";
+    case ChannelKind::kAck:
+      return "ACK";
+    case ChannelKind::kReplayRequest:
+      return "REPLAY_REQ";
+    case ChannelKind::kReplay:
+      return "REPLAY";
+    case ChannelKind::kReplayDone:
+      return "REPLAY_DONE";
+    case ChannelKind::kRigReplayRequest:
+      return "RIG_REPLAY_REQ";
   }
   return "?";
 }

@@ -20,8 +20,18 @@
 namespace idrig {
 
 enum class ChannelKind {
-  kExperimentRequest, kCommand, kMeasurement, kExperimentStatus, kIdentifyRequest, kClaim,
-  kResult, kAck, kReplayRequest, kReplay, kReplayDone, kRigReplayRequest
+  kExperimentRequest,
+  kCommand,
+  kMeasurement,
+  kExperimentStatus,
+  kIdentifyRequest,
+  kClaim,
+  kResult,
+  kAck,
+  kReplayRequest,
+  kReplay,
+  kReplayDone,
+  kRigReplayRequest
 };
 
 // Throws std::invalid_argument naming the rule when the rig id is not usable in a channel.

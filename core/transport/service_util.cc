@@ -1,11 +1,11 @@
 #include "core/transport/service_util.h"
 
+#include <unistd.h>
+
 #include <atomic>
 #include <csignal>
 #include <fstream>
 #include <stdexcept>
-
-#include <unistd.h>
 
 #include "core/transport/transport.h"
 

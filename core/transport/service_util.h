@@ -1,7 +1,7 @@
 #pragma once
 // Small helpers shared by the service mains: stop on SIGINT/SIGTERM, JSON config files.
-#include <nlohmann/json.hpp>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace idrig {

@@ -95,11 +95,16 @@ void SignCommand(actuator_command_t* command, const HmacKey& key) {
 
 const char* ToString(CommandCheck check) {
   switch (check) {
-    case CommandCheck::kOk: return "ok";
-    case CommandCheck::kUnsigned: return "unsigned";
-    case CommandCheck::kUnknownKey: return "unknown key id";
-    case CommandCheck::kForged: return "forged (HMAC mismatch)";
-    case CommandCheck::kReplayed: return "replayed (seq not above the last accepted)";
+    case CommandCheck::kOk:
+      return "ok";
+    case CommandCheck::kUnsigned:
+      return "unsigned";
+    case CommandCheck::kUnknownKey:
+      return "unknown key id";
+    case CommandCheck::kForged:
+      return "forged (HMAC mismatch)";
+    case CommandCheck::kReplayed:
+      return "replayed (seq not above the last accepted)";
   }
   return "?";
 }

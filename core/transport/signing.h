@@ -4,11 +4,10 @@
 //   hmac = HMAC-SHA256(key, E), E = LCM encoding of the command with hmac = 32 zero bytes.
 // Keys are 32 random bytes, stored as 64 hex characters in a file readable by its owner only.
 #include <cstdint>
+#include <idrig/actuator_command_t.hpp>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <idrig/actuator_command_t.hpp>
 
 namespace idrig {
 

@@ -48,8 +48,7 @@ service_status_t StatusReporter::Snapshot(const std::string& state,
   return s;
 }
 
-bool StatusReporter::Maybe(const std::string& state, const std::string& details_json,
-                           bool force) {
+bool StatusReporter::Maybe(const std::string& state, const std::string& details_json, bool force) {
   const int64_t now = NowMicros();
   if (!force && now - last_utime_ < static_cast<int64_t>(period_s_ * 1e6)) return false;
   last_utime_ = now;

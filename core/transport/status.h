@@ -2,9 +2,8 @@
 // Periodic full-state status (procman style): every service publishes a service_status_t on
 // IDRIG/STATUS/<service> about once a second, with the transport's counters and its own state
 // as JSON, so a restarted peer or an lcm-spy window catches up from a single message.
-#include <string>
-
 #include <idrig/service_status_t.hpp>
+#include <string>
 
 #include "core/transport/transport.h"
 

@@ -1,8 +1,7 @@
 #include "core/transport/transport.h"
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <chrono>
+#include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
 namespace idrig {
@@ -31,8 +30,10 @@ class LcmTransport : public Transport {
   int Publish(const std::string& channel, const void* data, size_t size) override {
     std::lock_guard<std::mutex> lock(publish_mutex_);
     const int rc = lcm_.publish(channel, data, static_cast<unsigned int>(size));
-    if (rc == 0) ++counters_.published;
-    else ++counters_.publish_errors;
+    if (rc == 0)
+      ++counters_.published;
+    else
+      ++counters_.publish_errors;
     return rc;
   }
 

@@ -24,12 +24,12 @@ CatalogService::CatalogService(Transport& transport, CatalogConfig config)
       config_(std::move(config)),
       catalog_(config_.db_path),
       reporter_(transport, "catalog", "catalog-" + HostName()) {
-  auto subscribe = [this](ChannelKind kind, void (CatalogService::*handler)(const uint8_t*, size_t)) {
-    transport_.Subscribe(AnyRigChannel(kind),
-                         [this, handler](const std::string&, const uint8_t* d, size_t n) {
-                           (this->*handler)(d, n);
-                         },
-                         10000);
+  auto subscribe = [this](ChannelKind kind,
+                          void (CatalogService::*handler)(const uint8_t*, size_t)) {
+    transport_.Subscribe(
+        AnyRigChannel(kind),
+        [this, handler](const std::string&, const uint8_t* d, size_t n) { (this->*handler)(d, n); },
+        10000);
   };
   subscribe(ChannelKind::kIdentifyRequest, &CatalogService::OnIdentifyRequest);
   subscribe(ChannelKind::kClaim, &CatalogService::OnClaim);
@@ -71,19 +71,21 @@ void CatalogService::OnClaim(const uint8_t* data, size_t size) {
   if (!Decode(data, size, &claim, &transport_.counters(), 65536)) return;
   if (claim.kind != identify_claim_t::KIND_CLAIM) return;  // our own replies
   JobRecord job;
-  const ClaimOutcome outcome =
-      catalog_.Claim(claim.request_id, claim.worker_id, NowMicros(),
-                     static_cast<int64_t>(config_.lease_s * 1e6), &job);
+  const ClaimOutcome outcome = catalog_.Claim(claim.request_id, claim.worker_id, NowMicros(),
+                                              static_cast<int64_t>(config_.lease_s * 1e6), &job);
   switch (outcome) {
     case ClaimOutcome::kGranted:
       ++grants_;
-      SendClaim(claim.rig_id, claim.request_id, identify_claim_t::KIND_GRANT, claim.worker_id, job.attempts);
+      SendClaim(claim.rig_id, claim.request_id, identify_claim_t::KIND_GRANT, claim.worker_id,
+                job.attempts);
       break;
     case ClaimOutcome::kDenied:
-      SendClaim(claim.rig_id, claim.request_id, identify_claim_t::KIND_DENY, job.worker_id, job.attempts);
+      SendClaim(claim.rig_id, claim.request_id, identify_claim_t::KIND_DENY, job.worker_id,
+                job.attempts);
       break;
     case ClaimOutcome::kDone:
-      SendClaim(claim.rig_id, claim.request_id, identify_claim_t::KIND_DONE, job.worker_id, job.attempts);
+      SendClaim(claim.rig_id, claim.request_id, identify_claim_t::KIND_DONE, job.worker_id,
+                job.attempts);
       break;
     case ClaimOutcome::kUnknown:
       break;  // the request has not reached us yet; the worker asks again
@@ -131,7 +133,8 @@ void CatalogService::OnResult(const uint8_t* data, size_t size) {
   ack.utime = NowMicros();
   transport_.PublishMessage(Channel(result.rig_id, ChannelKind::kAck), ack);
   ++acks_;
-  SendClaim(result.rig_id, result.request_id, identify_claim_t::KIND_DONE, result.worker_id, result.attempt);
+  SendClaim(result.rig_id, result.request_id, identify_claim_t::KIND_DONE, result.worker_id,
+            result.attempt);
 }
 
 void CatalogService::OnExperimentStatus(const uint8_t* data, size_t size) {

@@ -6,8 +6,8 @@
 //    when the job is finished: each job runs once, and again only if its worker vanished.
 //  - model_result_t -> stored once per request_id (committed, synchronous=FULL) -> result_ack_t.
 //  - experiment_status_t -> the experiments table (lineage of every model).
-#include <nlohmann/json.hpp>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/catalog/catalog.h"
@@ -18,8 +18,8 @@ namespace idrig {
 
 struct CatalogConfig {
   std::string db_path = "idrig-catalog.db";
-  double lease_s = 5.0;          // a worker must renew its claim within this time
-  double offer_period_s = 1.0;   // how often open jobs are offered again
+  double lease_s = 5.0;         // a worker must renew its claim within this time
+  double offer_period_s = 1.0;  // how often open jobs are offered again
   static CatalogConfig FromJson(const nlohmann::json& config);
 };
 

@@ -1,6 +1,5 @@
 // idrig-catalog: see services/catalog/catalog_service.h. Config: deploy/config/catalog.json.
 #include <CLI/CLI.hpp>
-
 #include <iostream>
 
 #include "core/transport/service_util.h"
@@ -14,13 +13,15 @@ int main(int argc, char** argv) {
   app.add_option("--url", url, "LCM URL");
   app.add_option("--db", db, "catalogue (SQLite file)");
   double loss = -1;
-  app.add_option("--loss", loss, "drop this fraction of received messages (tests of a lossy network)");
+  app.add_option("--loss", loss,
+                 "drop this fraction of received messages (tests of a lossy network)");
   CLI11_PARSE(app, argc, argv);
   try {
     nlohmann::json config = idrig::ReadJsonConfig(config_file);
     if (!db.empty()) config["db_path"] = db;
     if (url.empty()) url = idrig::ConfigValue<std::string>(config, "lcm_url", "");
-    auto transport = idrig::MakeServiceTransport(url, loss >= 0 ? loss : idrig::ConfigValue<double>(config, "receive_loss", 0.0));
+    auto transport = idrig::MakeServiceTransport(
+        url, loss >= 0 ? loss : idrig::ConfigValue<double>(config, "receive_loss", 0.0));
     idrig::CatalogService service(*transport, idrig::CatalogConfig::FromJson(config));
     idrig::InstallStopSignals();
     while (!idrig::StopRequested()) service.Poll(50);

@@ -1,7 +1,6 @@
 #include "services/excite/excite_service.h"
 
 #include <cmath>
-
 #include <idrig/actuator_command_t.hpp>
 
 #include "core/transport/channels.h"
@@ -45,8 +44,10 @@ void ExciteService::OnRequest(const uint8_t* data, size_t size) {
   if (!Decode(data, size, &request, &transport_.counters(), 65536)) return;
   if (request.rig_id != config_.rig_id) return;
   if (!seen_requests_.insert(request.request_id).second) return;  // idempotent
-  if (request.action == experiment_request_t::ACTION_START) Start(request);
-  else if (request.action == experiment_request_t::ACTION_STOP) Stop(request);
+  if (request.action == experiment_request_t::ACTION_START)
+    Start(request);
+  else if (request.action == experiment_request_t::ACTION_STOP)
+    Stop(request);
 }
 
 void ExciteService::Start(const experiment_request_t& request) {
@@ -65,7 +66,8 @@ void ExciteService::Start(const experiment_request_t& request) {
     recent_.push_back(status);
     if (recent_.size() > 8) recent_.pop_front();
   };
-  if (active_) return fail("rig busy with experiment " + std::to_string(active_->status.experiment_id));
+  if (active_)
+    return fail("rig busy with experiment " + std::to_string(active_->status.experiment_id));
   try {
     if (!(request.sample_rate_hz > 0 && std::isfinite(request.sample_rate_hz)))
       throw std::invalid_argument("sample_rate_hz must be > 0");
@@ -93,9 +95,10 @@ void ExciteService::Start(const experiment_request_t& request) {
     status.signal_spec = FormatExcitationSpec(accepted.spec);
     status.samples_total = std::llround(request.duration_s * request.sample_rate_hz);
     status.start_utime = a.start_wall_us;
-    status.message = "limits |u| <= " + std::to_string(limits.max_abs) +
-                     (limits.max_rate > 0 ? ", |du/dt| <= " + std::to_string(limits.max_rate) : "") +
-                     "; peak |u| " + std::to_string(accepted.peak_abs);
+    status.message =
+        "limits |u| <= " + std::to_string(limits.max_abs) +
+        (limits.max_rate > 0 ? ", |du/dt| <= " + std::to_string(limits.max_rate) : "") +
+        "; peak |u| " + std::to_string(accepted.peak_abs);
     a.status = status;
     active_ = std::move(a);
     PublishStatus(active_->status);
@@ -106,10 +109,10 @@ void ExciteService::Start(const experiment_request_t& request) {
 
 void ExciteService::Stop(const experiment_request_t& request) {
   if (!active_ || active_->status.experiment_id != request.experiment_id) return;
-  SendCommand(active_->status.experiment_id, active_->next_sample,
-              active_->status.sample_rate_hz, actuator_command_t::FLAG_STOP, {});
-  Finish(experiment_status_t::STATE_STOPPED, "stopped by request " +
-                                                 std::to_string(request.request_id));
+  SendCommand(active_->status.experiment_id, active_->next_sample, active_->status.sample_rate_hz,
+              actuator_command_t::FLAG_STOP, {});
+  Finish(experiment_status_t::STATE_STOPPED,
+         "stopped by request " + std::to_string(request.request_id));
 }
 
 void ExciteService::SendCommand(int64_t experiment_id, int64_t first_sample, double fs,
@@ -193,7 +196,8 @@ nlohmann::json ExciteService::Details() const {
   }
   nlohmann::json recent = nlohmann::json::array();
   for (const auto& s : recent_)
-    recent.push_back({{"experiment_id", s.experiment_id}, {"state", s.state}, {"message", s.message}});
+    recent.push_back(
+        {{"experiment_id", s.experiment_id}, {"state", s.state}, {"message", s.message}});
   d["recent"] = recent;
   return d;
 }

@@ -4,15 +4,14 @@
 // of block_samples samples, and publishes experiment status (IDRIG/<rig>/EXP_STATUS).
 // Limits are checked before anything moves (AcceptExcitation); the rig checks them again.
 #include <deque>
+#include <idrig/experiment_request_t.hpp>
+#include <idrig/experiment_status_t.hpp>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
-
-#include <idrig/experiment_request_t.hpp>
-#include <idrig/experiment_status_t.hpp>
 
 #include "core/numeric/excitation.h"
 #include "core/transport/signing.h"
@@ -23,12 +22,12 @@ namespace idrig {
 
 struct ExciteConfig {
   std::string rig_id = "sim1";
-  HmacKey key;                 // shared with the rig
+  HmacKey key;  // shared with the rig
   int32_t key_id = 1;
-  int block_samples = 10;      // samples per actuator_command_t
-  double max_abs = 10.0;       // |u| limit [actuator units] (a request may only lower it)
-  double max_rate = 0.0;       // |du/dt| limit [units/s]; 0: unchecked
-  double max_speed = 1000.0;   // largest experiment-time / wall-time ratio accepted
+  int block_samples = 10;     // samples per actuator_command_t
+  double max_abs = 10.0;      // |u| limit [actuator units] (a request may only lower it)
+  double max_rate = 0.0;      // |du/dt| limit [units/s]; 0: unchecked
+  double max_speed = 1000.0;  // largest experiment-time / wall-time ratio accepted
   double status_period_s = 0.5;
   // Reads keys "rig_id", "key_file", "key_id", "block_samples", "max_abs", "max_rate",
   // "max_speed", "status_period_s".

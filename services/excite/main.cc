@@ -1,6 +1,5 @@
 // idrig-excite: see services/excite/excite_service.h. Config: deploy/config/excite.json.
 #include <CLI/CLI.hpp>
-
 #include <iostream>
 
 #include "core/transport/service_util.h"
@@ -15,14 +14,16 @@ int main(int argc, char** argv) {
   app.add_option("--rig", rig, "rig id (overrides the config)");
   app.add_option("--key-file", key_file, "HMAC key file (overrides the config)");
   double loss = -1;
-  app.add_option("--loss", loss, "drop this fraction of received messages (tests of a lossy network)");
+  app.add_option("--loss", loss,
+                 "drop this fraction of received messages (tests of a lossy network)");
   CLI11_PARSE(app, argc, argv);
   try {
     nlohmann::json config = idrig::ReadJsonConfig(config_file);
     if (!rig.empty()) config["rig_id"] = rig;
     if (!key_file.empty()) config["key_file"] = key_file;
     if (url.empty()) url = idrig::ConfigValue<std::string>(config, "lcm_url", "");
-    auto transport = idrig::MakeServiceTransport(url, loss >= 0 ? loss : idrig::ConfigValue<double>(config, "receive_loss", 0.0));
+    auto transport = idrig::MakeServiceTransport(
+        url, loss >= 0 ? loss : idrig::ConfigValue<double>(config, "receive_loss", 0.0));
     idrig::ExciteService service(*transport, idrig::ExciteConfig::FromJson(config));
     idrig::InstallStopSignals();
     while (!idrig::StopRequested()) service.Poll(5);

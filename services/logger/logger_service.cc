@@ -1,7 +1,6 @@
 #include "services/logger/logger_service.h"
 
 #include <chrono>
-
 #include <idrig/actuator_command_t.hpp>
 #include <idrig/experiment_status_t.hpp>
 #include <idrig/measurement_block_t.hpp>
@@ -61,11 +60,10 @@ LoggerService::LoggerService(Transport& transport, LoggerConfig config)
   // Open once here so that a bad path fails at start, not in the writer thread.
   { ExperimentStore check(config_.db_path); }
   auto subscribe = [this](ChannelKind channel, Kind kind) {
-    transport_.Subscribe(AnyRigChannel(channel),
-                         [this, kind](const std::string&, const uint8_t* d, size_t n) {
-                           Enqueue(kind, d, n);
-                         },
-                         config_.lcm_queue_capacity);
+    transport_.Subscribe(
+        AnyRigChannel(channel),
+        [this, kind](const std::string&, const uint8_t* d, size_t n) { Enqueue(kind, d, n); },
+        config_.lcm_queue_capacity);
   };
   subscribe(ChannelKind::kMeasurement, Kind::kMeasurement);
   subscribe(ChannelKind::kCommand, Kind::kCommand);
@@ -108,7 +106,8 @@ void LoggerService::WriterLoop() {
     std::deque<Item> batch;
     {
       std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait_for(lock, std::chrono::milliseconds(100), [this] { return stop_ || !queue_.empty(); });
+      wake_.wait_for(lock, std::chrono::milliseconds(100),
+                     [this] { return stop_ || !queue_.empty(); });
       if (stop_ && queue_.empty()) break;
       batch.swap(queue_);
       in_flight_ = batch.size();
@@ -118,15 +117,20 @@ void LoggerService::WriterLoop() {
         store.Begin();
         std::vector<const Item*> replays;
         for (const Item& item : batch) {
-          if (item.kind == Kind::kReplayRequest) replays.push_back(&item);
-          else Store(store, item);
+          if (item.kind == Kind::kReplayRequest)
+            replays.push_back(&item);
+          else
+            Store(store, item);
         }
         store.Commit();
         // Replays after the commit: they see everything received before them.
         for (const Item* item : replays) Replay(store, *item);
       } catch (const std::exception&) {
         ++transport_.counters().handler_errors;
-        try { store.Commit(); } catch (...) {}
+        try {
+          store.Commit();
+        } catch (...) {
+        }
       }
     }
     {
@@ -135,7 +139,8 @@ void LoggerService::WriterLoop() {
     }
     drained_.notify_all();
     const auto now = std::chrono::steady_clock::now();
-    if (now - last_summary > std::chrono::milliseconds(static_cast<int>(config_.recover_period_s * 1000))) {
+    if (now - last_summary >
+        std::chrono::milliseconds(static_cast<int>(config_.recover_period_s * 1000))) {
       last_summary = now;
       try {
         RecoverLosses(store);
@@ -166,8 +171,10 @@ void LoggerService::Store(ExperimentStore& store, const Item& item) {
     b.utime = h.utime;
     b.recv_utime = item.recv_utime;
     b.data = item.bytes;
-    if (store.AddBlock(h.rig_id, h.experiment_id, b)) ++stored_blocks_;
-    else ++duplicates_;
+    if (store.AddBlock(h.rig_id, h.experiment_id, b))
+      ++stored_blocks_;
+    else
+      ++duplicates_;
   } else if (item.kind == Kind::kCommand) {
     actuator_command_t command;
     if (!Decode(data, size, &command, &transport_.counters())) return;
@@ -260,11 +267,16 @@ void LoggerService::UpdateSummary(ExperimentStore& store) {
   for (size_t i = first; i < experiments.size(); ++i) {
     const StoredExperiment& e = experiments[i];
     const auto missing = store.MissingBlocks(e.rig_id, e.experiment_id);
-    std::vector<int64_t> shown(missing.begin(), missing.begin() + std::min<size_t>(missing.size(), 50));
-    list.push_back({{"rig_id", e.rig_id}, {"experiment_id", e.experiment_id},
-                    {"blocks", e.blocks_stored}, {"commands", e.commands_stored},
-                    {"ended", e.ended}, {"blocks_total", e.blocks_total},
-                    {"missing_count", missing.size()}, {"missing", shown},
+    std::vector<int64_t> shown(missing.begin(),
+                               missing.begin() + std::min<size_t>(missing.size(), 50));
+    list.push_back({{"rig_id", e.rig_id},
+                    {"experiment_id", e.experiment_id},
+                    {"blocks", e.blocks_stored},
+                    {"commands", e.commands_stored},
+                    {"ended", e.ended},
+                    {"blocks_total", e.blocks_total},
+                    {"missing_count", missing.size()},
+                    {"missing", shown},
                     {"complete", e.ended && missing.empty()}});
   }
   std::lock_guard<std::mutex> lock(summary_mutex_);

@@ -31,11 +31,11 @@ bool PeekMeasurementHeader(const uint8_t* data, size_t size, MeasurementHeader* 
 
 struct LoggerConfig {
   std::string db_path = "idrig-experiments.db";
-  size_t queue_capacity = 200000;  // messages waiting for the writer
-  int lcm_queue_capacity = 100000; // LCM per-subscription queue
-  int replay_pause_every = 200;    // blocks; pause 2 ms to let receivers drain
-  double recover_period_s = 0.5;   // ask the rig again for lost blocks this often
-  double recover_window_s = 60.0;  // ... for experiments ended less than this ago
+  size_t queue_capacity = 200000;   // messages waiting for the writer
+  int lcm_queue_capacity = 100000;  // LCM per-subscription queue
+  int replay_pause_every = 200;     // blocks; pause 2 ms to let receivers drain
+  double recover_period_s = 0.5;    // ask the rig again for lost blocks this often
+  double recover_window_s = 60.0;   // ... for experiments ended less than this ago
   static LoggerConfig FromJson(const nlohmann::json& config);
 };
 

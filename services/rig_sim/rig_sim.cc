@@ -1,9 +1,8 @@
 #include "services/rig_sim/rig_sim.h"
 
 #include <cmath>
-#include <set>
-
 #include <idrig/replay_request_t.hpp>
+#include <set>
 
 #include "core/io/model_json.h"
 #include "core/transport/channels.h"
@@ -15,9 +14,12 @@ RigSimConfig RigSimConfig::FromJson(const nlohmann::json& c) {
   RigSimConfig config;
   config.rig_id = ConfigValue<std::string>(c, "rig_id", config.rig_id);
   const std::string model_file = ConfigValue<std::string>(c, "model_file", "");
-  if (!model_file.empty()) config.plant = ReadModelFile(model_file);
-  else if (c.contains("model")) config.plant = ModelFromJson(c["model"]);
-  else throw std::invalid_argument("idrig-rig-sim needs a plant: config 'model_file' or 'model'");
+  if (!model_file.empty())
+    config.plant = ReadModelFile(model_file);
+  else if (c.contains("model"))
+    config.plant = ModelFromJson(c["model"]);
+  else
+    throw std::invalid_argument("idrig-rig-sim needs a plant: config 'model_file' or 'model'");
   config.noise_std = ConfigValue<double>(c, "noise_std", config.noise_std);
   config.seed = ConfigValue<uint64_t>(c, "seed", config.seed);
   config.max_abs = ConfigValue<double>(c, "max_abs", config.max_abs);
@@ -39,7 +41,8 @@ RigSim::RigSim(Transport& transport, RigSimConfig config)
       meas_channel_(Channel(config_.rig_id, ChannelKind::kMeasurement)),
       status_channel_(Channel(config_.rig_id, ChannelKind::kExperimentStatus)),
       rng_(config_.seed) {
-  if (config_.keys.empty()) throw std::invalid_argument("idrig-rig-sim needs an HMAC key (key_file)");
+  if (config_.keys.empty())
+    throw std::invalid_argument("idrig-rig-sim needs an HMAC key (key_file)");
   const StateSpace ss = ToStateSpace(config_.plant);
   if (ss.NumInputs() != 1 || ss.NumOutputs() != 1)
     throw std::invalid_argument("idrig-rig-sim simulates SISO plants only");
@@ -47,12 +50,12 @@ RigSim::RigSim(Transport& transport, RigSimConfig config)
     throw std::invalid_argument("block_samples must be in 1..3000 (one block < 60 KB)");
   for (const auto& [id, key] : config_.keys) verifier_.AddKey(id, key);
   last_u_ = config_.safe_input;
-  transport_.Subscribe(Channel(config_.rig_id, ChannelKind::kCommand),
-                       [this](const std::string&, const uint8_t* d, size_t n) { OnCommand(d, n); },
-                       10000);
-  transport_.Subscribe(Channel(config_.rig_id, ChannelKind::kRigReplayRequest),
-                       [this](const std::string&, const uint8_t* d, size_t n) { OnReplayRequest(d, n); },
-                       100);
+  transport_.Subscribe(
+      Channel(config_.rig_id, ChannelKind::kCommand),
+      [this](const std::string&, const uint8_t* d, size_t n) { OnCommand(d, n); }, 10000);
+  transport_.Subscribe(
+      Channel(config_.rig_id, ChannelKind::kRigReplayRequest),
+      [this](const std::string&, const uint8_t* d, size_t n) { OnReplayRequest(d, n); }, 100);
 }
 
 void RigSim::OnReplayRequest(const uint8_t* data, size_t size) {
@@ -74,26 +77,34 @@ void RigSim::OnCommand(const uint8_t* data, size_t size) {
   TransportCounters& counters = transport_.counters();
   const CommandCheck check = verifier_.Verify(command);
   if (check != CommandCheck::kOk) {
-    if (check == CommandCheck::kForged) ++counters.forged;
-    else if (check == CommandCheck::kReplayed) ++counters.replayed;
-    else ++counters.unsigned_count;
-    last_refusal_ = std::string("command seq ") + std::to_string(command.seq) + " refused: " + ToString(check);
+    if (check == CommandCheck::kForged)
+      ++counters.forged;
+    else if (check == CommandCheck::kReplayed)
+      ++counters.replayed;
+    else
+      ++counters.unsigned_count;
+    last_refusal_ =
+        std::string("command seq ") + std::to_string(command.seq) + " refused: " + ToString(check);
     return;
   }
   if (command.rig_id != config_.rig_id) return;
   if (ended_ids_.count(command.experiment_id)) return;  // late commands of an ended experiment
   // Limits, checked on every sample before any is applied.
   double previous = (experiment_ && experiment_->status.experiment_id == command.experiment_id)
-                        ? last_u_ : config_.safe_input;
+                        ? last_u_
+                        : config_.safe_input;
   for (int i = 0; i < command.n_samples; ++i) {
     const double u = command.u[i];
     const double rate = std::abs(u - previous) * command.sample_rate_hz;
     std::string why;
-    if (!std::isfinite(u)) why = "non-finite input";
+    if (!std::isfinite(u))
+      why = "non-finite input";
     else if (config_.max_abs > 0 && std::abs(u) > config_.max_abs)
-      why = "|u| = " + std::to_string(std::abs(u)) + " above the rig's limit " + std::to_string(config_.max_abs);
+      why = "|u| = " + std::to_string(std::abs(u)) + " above the rig's limit " +
+            std::to_string(config_.max_abs);
     else if (config_.max_rate > 0 && rate > config_.max_rate)
-      why = "|du/dt| = " + std::to_string(rate) + " above the rig's limit " + std::to_string(config_.max_rate);
+      why = "|du/dt| = " + std::to_string(rate) + " above the rig's limit " +
+            std::to_string(config_.max_rate);
     if (!why.empty()) {
       ++counters.over_limit;
       last_refusal_ = "command seq " + std::to_string(command.seq) + " refused: " + why;
@@ -106,8 +117,9 @@ void RigSim::OnCommand(const uint8_t* data, size_t size) {
     previous = u;
   }
   if (!experiment_ || experiment_->status.experiment_id != command.experiment_id) {
-    if (experiment_) End(experiment_status_t::STATE_FAILED, "superseded by experiment " +
-                                                             std::to_string(command.experiment_id));
+    if (experiment_)
+      End(experiment_status_t::STATE_FAILED,
+          "superseded by experiment " + std::to_string(command.experiment_id));
     if (command.flags & actuator_command_t::FLAG_STOP) return;
     StartExperiment(command);
   }
@@ -227,9 +239,11 @@ void RigSim::End(int32_t state, const std::string& message) {
 
 void RigSim::Tick() {
   const int64_t now = NowMicros();
-  if (experiment_ && now - experiment_->last_command_us > static_cast<int64_t>(config_.watchdog_s * 1e6))
-    End(experiment_status_t::STATE_FAILED,
-        "watchdog: no command for " + std::to_string(config_.watchdog_s) + " s; safe input applied");
+  if (experiment_ &&
+      now - experiment_->last_command_us > static_cast<int64_t>(config_.watchdog_s * 1e6))
+    End(experiment_status_t::STATE_FAILED, "watchdog: no command for " +
+                                               std::to_string(config_.watchdog_s) +
+                                               " s; safe input applied");
   if (now - last_status_us_ >= static_cast<int64_t>(config_.status_period_s * 1e6)) {
     last_status_us_ = now;
     if (experiment_) PublishStatus(experiment_->status);
@@ -258,8 +272,10 @@ nlohmann::json RigSim::Details() const {
                        {"blocks", experiment_->block_seq}};
   nlohmann::json recent = nlohmann::json::array();
   for (const auto& s : recent_)
-    recent.push_back({{"experiment_id", s.experiment_id}, {"state", s.state},
-                      {"samples", s.samples_total}, {"blocks", s.blocks_total},
+    recent.push_back({{"experiment_id", s.experiment_id},
+                      {"state", s.state},
+                      {"samples", s.samples_total},
+                      {"blocks", s.blocks_total},
                       {"message", s.message}});
   d["recent"] = recent;
   return d;

@@ -6,15 +6,14 @@
 // the safe input applied), and goes to the safe input when commands stop (watchdog).
 // A real rig's driver speaks the same messages (docs/services.md).
 #include <deque>
+#include <idrig/actuator_command_t.hpp>
+#include <idrig/experiment_status_t.hpp>
+#include <idrig/measurement_block_t.hpp>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <random>
 #include <string>
-
-#include <idrig/actuator_command_t.hpp>
-#include <idrig/experiment_status_t.hpp>
-#include <idrig/measurement_block_t.hpp>
 
 #include "core/numeric/lti_model.h"
 #include "core/transport/signing.h"
@@ -25,15 +24,15 @@ namespace idrig {
 
 struct RigSimConfig {
   std::string rig_id = "sim1";
-  LtiModel plant;                  // SISO plant
-  double noise_std = 0.0;          // output noise standard deviation [output units]
+  LtiModel plant;          // SISO plant
+  double noise_std = 0.0;  // output noise standard deviation [output units]
   uint64_t seed = 1;
-  double max_abs = 10.0;           // refused above |u| [actuator units]; 0: unchecked
-  double max_rate = 0.0;           // refused above |du/dt| [units/s]; 0: unchecked
-  double watchdog_s = 1.0;         // no command for this long -> safe input, experiment aborted
-  double safe_input = 0.0;         // [actuator units]
-  int block_samples = 100;         // samples per measurement block (< 60 KB)
-  int keep_experiments = 4;        // experiments whose blocks are kept for re-sending
+  double max_abs = 10.0;            // refused above |u| [actuator units]; 0: unchecked
+  double max_rate = 0.0;            // refused above |du/dt| [units/s]; 0: unchecked
+  double watchdog_s = 1.0;          // no command for this long -> safe input, experiment aborted
+  double safe_input = 0.0;          // [actuator units]
+  int block_samples = 100;          // samples per measurement block (< 60 KB)
+  int keep_experiments = 4;         // experiments whose blocks are kept for re-sending
   std::map<int32_t, HmacKey> keys;  // accepted keys by key id
   double status_period_s = 0.5;
   // Keys: "rig_id", "model_file" or "model" (idrig.model/1), "noise_std", "seed", "max_abs",

@@ -4,13 +4,12 @@
 
 #include <algorithm>
 #include <chrono>
-#include <thread>
-
 #include <idrig/experiment_status_t.hpp>
 #include <idrig/identify_claim_t.hpp>
 #include <idrig/replay_done_t.hpp>
 #include <idrig/replay_request_t.hpp>
 #include <idrig/result_ack_t.hpp>
+#include <thread>
 
 #include "core/methods/registry.h"
 #include "core/transport/channels.h"
@@ -40,11 +39,13 @@ IoRecord AssembleRecord(const std::map<int64_t, measurement_block_t>& blocks,
   double ts = 0.0;
   for (int64_t seq = 0; seq < blocks_total; ++seq) {
     auto it = blocks.find(seq);
-    if (it == blocks.end()) throw std::invalid_argument("block " + std::to_string(seq) + " is missing");
+    if (it == blocks.end())
+      throw std::invalid_argument("block " + std::to_string(seq) + " is missing");
     const measurement_block_t& b = it->second;
     if (b.first_sample != samples)
       throw std::invalid_argument("block " + std::to_string(seq) + " starts at sample " +
-                                  std::to_string(b.first_sample) + ", expected " + std::to_string(samples));
+                                  std::to_string(b.first_sample) + ", expected " +
+                                  std::to_string(samples));
     if (inputs < 0) {
       inputs = b.n_inputs;
       outputs = b.n_outputs;
@@ -114,8 +115,7 @@ model_result_t Compute(identify_request_t request, IoRecord record, std::string 
     r.ok = false;
     r.message = std::string("identification failed: ") + e.what();
   }
-  if (debug_delay_s > 0)
-    std::this_thread::sleep_for(std::chrono::microseconds(Us(debug_delay_s)));
+  if (debug_delay_s > 0) std::this_thread::sleep_for(std::chrono::microseconds(Us(debug_delay_s)));
   r.compute_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
 }
@@ -130,11 +130,10 @@ WorkerService::WorkerService(Transport& transport, WorkerConfig config)
       reporter_(transport, "worker", config_.worker_id) {
   auto subscribe = [this](ChannelKind kind, void (WorkerService::*handler)(const uint8_t*, size_t),
                           int capacity) {
-    transport_.Subscribe(AnyRigChannel(kind),
-                         [this, handler](const std::string&, const uint8_t* d, size_t n) {
-                           (this->*handler)(d, n);
-                         },
-                         capacity);
+    transport_.Subscribe(
+        AnyRigChannel(kind),
+        [this, handler](const std::string&, const uint8_t* d, size_t n) { (this->*handler)(d, n); },
+        capacity);
   };
   subscribe(ChannelKind::kIdentifyRequest, &WorkerService::OnRequest, 1000);
   subscribe(ChannelKind::kClaim, &WorkerService::OnClaim, 1000);
@@ -206,8 +205,10 @@ void WorkerService::OnClaim(const uint8_t* data, size_t size) {
     offers_.erase(offer);
     job_ = std::move(job);
     last_message_ = "running job " + std::to_string(id) + " (" + job_->request.method + ")";
-    if (HaveCompleteRecord(*job_)) StartCompute();
-    else RequestReplay();
+    if (HaveCompleteRecord(*job_))
+      StartCompute();
+    else
+      RequestReplay();
   } else {
     offers_.erase(id);  // denied: the holder has it; the catalogue re-offers if it vanishes
   }
@@ -280,7 +281,8 @@ void WorkerService::OnReplayDone(const uint8_t* data, size_t size) {
   job_->logger_complete = done.complete;
   if (done.ended && !done.complete)
     last_message_ = "the logger's record of experiment " + std::to_string(done.experiment_id) +
-                    " lacks " + std::to_string(done.n_missing) + " block(s) (it is recovering them)";
+                    " lacks " + std::to_string(done.n_missing) +
+                    " block(s) (it is recovering them)";
   if (HaveCompleteRecord(*job_)) StartCompute();
   // Otherwise Tick() asks again after replay_retry_s (experiment still running, or replayed
   // blocks lost on the way).
@@ -324,7 +326,8 @@ void WorkerService::Fail(const std::string& message) {
 void WorkerService::OnAck(const uint8_t* data, size_t size) {
   result_ack_t ack;
   if (!Decode(data, size, &ack, &transport_.counters(), 65536)) return;
-  if (!job_ || job_->phase != Phase::kPublishing || ack.request_id != job_->request.request_id) return;
+  if (!job_ || job_->phase != Phase::kPublishing || ack.request_id != job_->request.request_id)
+    return;
   FinishJob();
 }
 
@@ -344,7 +347,8 @@ void WorkerService::Tick() {
       SendClaim(job.request);  // lease renewal
     }
     if (job.phase == Phase::kFetching) {
-      if (HaveCompleteRecord(job)) StartCompute();
+      if (HaveCompleteRecord(job))
+        StartCompute();
       else if (now - job.start_us > Us(config_.data_timeout_s))
         Fail("no complete record of experiment " + std::to_string(job.request.experiment_id) +
              " within " + std::to_string(config_.data_timeout_s) + " s");
@@ -385,8 +389,8 @@ nlohmann::json WorkerService::Details() const {
   d["message"] = last_message_;
   if (job_) {
     static const char* phases[] = {"fetching", "computing", "publishing"};
-    d["job"] = {{"request_id", job_->request.request_id}, {"method", job_->request.method},
-                {"experiment_id", job_->request.experiment_id}, {"attempt", job_->attempt},
+    d["job"] = {{"request_id", job_->request.request_id},         {"method", job_->request.method},
+                {"experiment_id", job_->request.experiment_id},   {"attempt", job_->attempt},
                 {"phase", phases[static_cast<int>(job_->phase)]}, {"replays", job_->replays}};
   }
   return d;
@@ -394,7 +398,8 @@ nlohmann::json WorkerService::Details() const {
 
 void WorkerService::Poll(int timeout_ms) {
   // While the compute thread runs, look at it every millisecond (no message would wake us).
-  transport_.Handle(job_ && job_->phase == Phase::kComputing ? std::min(timeout_ms, 1) : timeout_ms);
+  transport_.Handle(job_ && job_->phase == Phase::kComputing ? std::min(timeout_ms, 1)
+                                                             : timeout_ms);
   Tick();
 }
 

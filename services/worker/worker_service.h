@@ -10,15 +10,14 @@
 // A worker killed mid-job stops renewing its lease; the catalogue then offers the job again.
 #include <deque>
 #include <future>
+#include <idrig/identify_request_t.hpp>
+#include <idrig/measurement_block_t.hpp>
+#include <idrig/model_result_t.hpp>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <set>
 #include <string>
-
-#include <idrig/identify_request_t.hpp>
-#include <idrig/measurement_block_t.hpp>
-#include <idrig/model_result_t.hpp>
 
 #include "core/numeric/io_record.h"
 #include "core/transport/status.h"
@@ -27,14 +26,14 @@
 namespace idrig {
 
 struct WorkerConfig {
-  std::string worker_id;          // default: worker-<host>-<pid>
-  double claim_retry_s = 0.3;     // re-send an unanswered claim
-  double renew_s = 1.0;           // lease renewal period (below the catalogue's lease_s)
-  double result_retry_s = 0.5;    // re-send an unacknowledged result
-  double replay_retry_s = 0.5;    // ask the logger again for missing blocks
-  double data_timeout_s = 60.0;   // no complete record by then: the job fails
-  double debug_delay_s = 0.0;     // extra compute time (tests of a worker dying mid-job)
-  int cache_experiments = 4;      // experiments whose blocks are kept in memory
+  std::string worker_id;         // default: worker-<host>-<pid>
+  double claim_retry_s = 0.3;    // re-send an unanswered claim
+  double renew_s = 1.0;          // lease renewal period (below the catalogue's lease_s)
+  double result_retry_s = 0.5;   // re-send an unacknowledged result
+  double replay_retry_s = 0.5;   // ask the logger again for missing blocks
+  double data_timeout_s = 60.0;  // no complete record by then: the job fails
+  double debug_delay_s = 0.0;    // extra compute time (tests of a worker dying mid-job)
+  int cache_experiments = 4;     // experiments whose blocks are kept in memory
   static WorkerConfig FromJson(const nlohmann::json& config);
 };
 

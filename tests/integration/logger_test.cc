@@ -5,7 +5,6 @@
 #include <unistd.h>
 
 #include <cstdio>
-
 #include <idrig/experiment_status_t.hpp>
 #include <idrig/measurement_block_t.hpp>
 #include <idrig/replay_done_t.hpp>

@@ -6,7 +6,6 @@
 
 #include <chrono>
 #include <cstdio>
-
 #include <idrig/experiment_request_t.hpp>
 #include <idrig/identify_request_t.hpp>
 #include <idrig/measurement_block_t.hpp>
@@ -121,8 +120,8 @@ void StartExperiment(Transport& t, int64_t experiment_id, const std::string& spe
   t.PublishMessage(Channel("rig-t", ChannelKind::kExperimentRequest), r);
 }
 
-void RequestModel(Transport& t, int64_t request_id, int64_t experiment_id, const std::string& method,
-                  const std::string& options) {
+void RequestModel(Transport& t, int64_t request_id, int64_t experiment_id,
+                  const std::string& method, const std::string& options) {
   identify_request_t r{};
   r.utime = NowMicros();
   r.request_id = request_id;
@@ -217,7 +216,12 @@ TEST(Pipeline, BadRequestsFailWithAMessage) {
   };
   ASSERT_TRUE(p.RunUntil(done, 10.0));
   RequestModel(*p.transport, 9100, 202, "no-such-method", "{}");
-  ASSERT_TRUE(p.RunUntil([&] { auto j = reader.Job(9100); return j && j->state == "failed"; }, 10.0));
+  ASSERT_TRUE(p.RunUntil(
+      [&] {
+        auto j = reader.Job(9100);
+        return j && j->state == "failed";
+      },
+      10.0));
   EXPECT_NE(reader.Job(9100)->message.find("unknown method 'no-such-method'"), std::string::npos)
       << reader.Job(9100)->message;
   EXPECT_NE(reader.Job(9100)->message.find("arx-oe"), std::string::npos);

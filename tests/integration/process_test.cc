@@ -12,15 +12,14 @@
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
-#include <set>
-#include <thread>
-
 #include <idrig/experiment_request_t.hpp>
 #include <idrig/experiment_status_t.hpp>
 #include <idrig/identify_request_t.hpp>
 #include <idrig/model_result_t.hpp>
 #include <idrig/result_ack_t.hpp>
 #include <idrig/service_status_t.hpp>
+#include <set>
+#include <thread>
 
 #include "core/catalog/catalog.h"
 #include "core/transport/channels.h"
@@ -115,9 +114,13 @@ model_result_t Result(int64_t request_id) {
   r.software_version = IDRIG_VERSION;
   const double pole = -1.0 - 0.001 * static_cast<double>(request_id);
   r.report_json = nlohmann::json({{"fit_percent", 90.0},
-                                  {"model", {{"format", "idrig.model/1"}, {"kind", "tf"},
-                                             {"domain", "continuous"}, {"Ts", 0.0},
-                                             {"num", {1.0}}, {"den", {1.0, -pole}}}}})
+                                  {"model",
+                                   {{"format", "idrig.model/1"},
+                                    {"kind", "tf"},
+                                    {"domain", "continuous"},
+                                    {"Ts", 0.0},
+                                    {"num", {1.0}},
+                                    {"den", {1.0, -pole}}}}})
                       .dump();
   return r;
 }
@@ -129,21 +132,28 @@ TEST(Processes, CatalogKilledDuringABurstKeepsEveryAcknowledgedResultOnce) {
   auto t = MakeLcmTransport(kUrl);
   std::set<int64_t> acked;
   bool catalog_up = false;
-  t->Subscribe("IDRIG/rig-k/ACK", [&](const std::string&, const uint8_t* d, size_t n) {
-    result_ack_t a;
-    if (Decode(d, n, &a, nullptr)) acked.insert(a.request_id);
-  }, 10000);
-  t->Subscribe("IDRIG/STATUS/catalog", [&](const std::string&, const uint8_t*, size_t) { catalog_up = true; });
+  t->Subscribe(
+      "IDRIG/rig-k/ACK",
+      [&](const std::string&, const uint8_t* d, size_t n) {
+        result_ack_t a;
+        if (Decode(d, n, &a, nullptr)) acked.insert(a.request_id);
+      },
+      10000);
+  t->Subscribe("IDRIG/STATUS/catalog",
+               [&](const std::string&, const uint8_t*, size_t) { catalog_up = true; });
   Child catalog;
   Start(&catalog, "idrig-catalog", {"--db", db}, dir + "/catalog.log");
-  ASSERT_TRUE(Until(*t, [&] { return catalog_up; }, 10.0)) << "idrig-catalog did not start";
+  ASSERT_TRUE(Until(
+      *t, [&] { return catalog_up; }, 10.0))
+      << "idrig-catalog did not start";
 
   const int64_t kResults = 300;
   std::set<int64_t> acked_before_kill;
   bool killed = false, restarted = false;
   auto killed_at = std::chrono::steady_clock::now();
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
-  while (static_cast<int64_t>(acked.size()) < kResults && std::chrono::steady_clock::now() < deadline) {
+  while (static_cast<int64_t>(acked.size()) < kResults &&
+         std::chrono::steady_clock::now() < deadline) {
     // A burst: every unacknowledged result, as the workers' retries would send them.
     int sent = 0;
     for (int64_t id = 1; id <= kResults; ++id) {
@@ -163,8 +173,10 @@ TEST(Processes, CatalogKilledDuringABurstKeepsEveryAcknowledgedResultOnce) {
         EXPECT_EQ(after_kill.IntegrityCheck(), "ok");
       }
     }
-    Until(*t, [] { return false; }, 0.2);
-    if (killed && !restarted && std::chrono::steady_clock::now() - killed_at > std::chrono::milliseconds(300)) {
+    Until(
+        *t, [] { return false; }, 0.2);
+    if (killed && !restarted &&
+        std::chrono::steady_clock::now() - killed_at > std::chrono::milliseconds(300)) {
       Start(&catalog, "idrig-catalog", {"--db", db}, dir + "/catalog.log");
       restarted = true;
     }
@@ -185,12 +197,21 @@ TEST(Processes, WorkerKilledMidJobAnotherWorkerCompletesIt) {
   const std::string dir = Dir("worker_kill");
   const std::string key = dir + "/hmac.key";
   WriteNewKeyFile(key);
-  WriteFile(dir + "/catalog.json", nlohmann::json({{"db_path", dir + "/catalog.db"}, {"lease_s", 1.0},
-                                                  {"offer_period_s", 0.3}}).dump());
-  WriteFile(dir + "/rig.json",
-            nlohmann::json({{"rig_id", "rig-k"}, {"noise_std", 0.001}, {"key_file", key},
-                            {"model", {{"format", "idrig.model/1"}, {"kind", "tf"}, {"domain", "continuous"},
-                                       {"Ts", 0.0}, {"num", {1.0}}, {"den", {1.0, 1.2, 1.0}}}}}).dump());
+  WriteFile(
+      dir + "/catalog.json",
+      nlohmann::json({{"db_path", dir + "/catalog.db"}, {"lease_s", 1.0}, {"offer_period_s", 0.3}})
+          .dump());
+  WriteFile(dir + "/rig.json", nlohmann::json({{"rig_id", "rig-k"},
+                                               {"noise_std", 0.001},
+                                               {"key_file", key},
+                                               {"model",
+                                                {{"format", "idrig.model/1"},
+                                                 {"kind", "tf"},
+                                                 {"domain", "continuous"},
+                                                 {"Ts", 0.0},
+                                                 {"num", {1.0}},
+                                                 {"den", {1.0, 1.2, 1.0}}}}})
+                                   .dump());
   WriteFile(dir + "/excite.json", nlohmann::json({{"rig_id", "rig-k"}, {"key_file", key}}).dump());
   WriteFile(dir + "/worker.json", nlohmann::json({{"renew_s", 0.25}}).dump());
   Child catalog, logger, rig, excite, worker1, worker2;
@@ -198,8 +219,8 @@ TEST(Processes, WorkerKilledMidJobAnotherWorkerCompletesIt) {
   Start(&logger, "idrig-logger", {"--db", dir + "/experiments.db"}, dir + "/logger.log");
   Start(&rig, "idrig-rig-sim", {"--config", dir + "/rig.json"}, dir + "/rig.log");
   Start(&excite, "idrig-excite", {"--config", dir + "/excite.json"}, dir + "/excite.log");
-  Start(&worker1, "idrig-worker", {"--config", dir + "/worker.json", "--id", "w1", "--debug-delay", "4"},
-        dir + "/w1.log");
+  Start(&worker1, "idrig-worker",
+        {"--config", dir + "/worker.json", "--id", "w1", "--debug-delay", "4"}, dir + "/w1.log");
 
   auto t = MakeLcmTransport(kUrl);
   std::set<std::string> services;
@@ -217,7 +238,9 @@ TEST(Processes, WorkerKilledMidJobAnotherWorkerCompletesIt) {
     result_ack_t a;
     if (Decode(d, n, &a, nullptr) && a.request_id == 4242) ack = a;
   });
-  ASSERT_TRUE(Until(*t, [&] { return services.size() == 5; }, 10.0)) << "services did not start";
+  ASSERT_TRUE(Until(
+      *t, [&] { return services.size() == 5; }, 10.0))
+      << "services did not start";
 
   experiment_request_t request{};
   request.utime = NowMicros();
@@ -230,7 +253,8 @@ TEST(Processes, WorkerKilledMidJobAnotherWorkerCompletesIt) {
   request.duration_s = 25.4;
   request.speed = 50;
   t->PublishMessage("IDRIG/rig-k/EXP_REQ", request);
-  ASSERT_TRUE(Until(*t, [&] { return rig_status.state == experiment_status_t::STATE_DONE; }, 10.0));
+  ASSERT_TRUE(Until(
+      *t, [&] { return rig_status.state == experiment_status_t::STATE_DONE; }, 10.0));
 
   identify_request_t job{};
   job.utime = NowMicros();
@@ -242,18 +266,27 @@ TEST(Processes, WorkerKilledMidJobAnotherWorkerCompletesIt) {
   t->PublishMessage("IDRIG/rig-k/IDENT_REQ", job);
   // Wait until w1 holds the lease (it then computes, plus a 4 s delay), then kill it.
   Catalog reader(dir + "/catalog.db");
-  ASSERT_TRUE(Until(*t, [&] {
-    auto j = reader.Job(4242);
-    return j && j->state == "leased" && j->worker_id == "w1";
-  }, 10.0)) << "w1 never held the job";
-  Until(*t, [] { return false; }, 0.5);
+  ASSERT_TRUE(Until(
+      *t,
+      [&] {
+        auto j = reader.Job(4242);
+        return j && j->state == "leased" && j->worker_id == "w1";
+      },
+      10.0))
+      << "w1 never held the job";
+  Until(
+      *t, [] { return false; }, 0.5);
   ASSERT_FALSE(ack.has_value()) << "w1 finished before it could be killed";
   worker1.Kill(SIGKILL);
-  Start(&worker2, "idrig-worker", {"--config", dir + "/worker.json", "--id", "w2"}, dir + "/w2.log");
-  ASSERT_TRUE(Until(*t, [&] { return ack.has_value(); }, 15.0)) << "no worker completed the job";
+  Start(&worker2, "idrig-worker", {"--config", dir + "/worker.json", "--id", "w2"},
+        dir + "/w2.log");
+  ASSERT_TRUE(Until(
+      *t, [&] { return ack.has_value(); }, 15.0))
+      << "no worker completed the job";
   EXPECT_GT(ack->model_id, 0);
   EXPECT_EQ(ack->worker_id, "w2");
-  Until(*t, [] { return false; }, 0.5);
+  Until(
+      *t, [] { return false; }, 0.5);
   EXPECT_EQ(reader.CountModels(), 1);
   const auto model = reader.ModelForRequest(4242);
   ASSERT_TRUE(model.has_value());

@@ -3,11 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
-#include <thread>
-
 #include <idrig/actuator_command_t.hpp>
 #include <idrig/experiment_status_t.hpp>
 #include <idrig/measurement_block_t.hpp>
+#include <thread>
 
 #include "core/transport/channels.h"
 #include "services/rig_sim/rig_sim.h"
@@ -34,14 +33,16 @@ class RigSecurity : public ::testing::Test {
     config.block_samples = 5;
     config.keys[1] = kKey;
     rig_ = std::make_unique<RigSim>(*transport_, config);
-    transport_->Subscribe("IDRIG/rig-s/MEAS", [this](const std::string&, const uint8_t* d, size_t n) {
-      measurement_block_t b;
-      if (Decode(d, n, &b, nullptr)) blocks_.push_back(b);
-    });
-    transport_->Subscribe("IDRIG/rig-s/EXP_STATUS", [this](const std::string&, const uint8_t* d, size_t n) {
-      experiment_status_t s;
-      if (Decode(d, n, &s, nullptr)) last_status_ = s;
-    });
+    transport_->Subscribe("IDRIG/rig-s/MEAS",
+                          [this](const std::string&, const uint8_t* d, size_t n) {
+                            measurement_block_t b;
+                            if (Decode(d, n, &b, nullptr)) blocks_.push_back(b);
+                          });
+    transport_->Subscribe("IDRIG/rig-s/EXP_STATUS",
+                          [this](const std::string&, const uint8_t* d, size_t n) {
+                            experiment_status_t s;
+                            if (Decode(d, n, &s, nullptr)) last_status_ = s;
+                          });
   }
   actuator_command_t Command(int64_t seq, int64_t first, std::vector<double> u, int32_t flags = 0) {
     actuator_command_t c{};
@@ -116,7 +117,8 @@ TEST_F(RigSecurity, RefusesOverLimitCommandsAndGoesSafe) {
   EXPECT_FALSE(rig_->running());
   EXPECT_DOUBLE_EQ(rig_->applied_input(), 0.0);
   EXPECT_EQ(last_status_.state, experiment_status_t::STATE_FAILED);
-  EXPECT_NE(last_status_.message.find("above the rig's limit"), std::string::npos) << last_status_.message;
+  EXPECT_NE(last_status_.message.find("above the rig's limit"), std::string::npos)
+      << last_status_.message;
   EXPECT_EQ(Samples(), 5);
   // A jump of 1.5 in one sample at 100 Hz is 150 units/s, above max_rate = 100.
   actuator_command_t too_fast = Command(22, 0, {1.5});

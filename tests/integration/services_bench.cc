@@ -11,6 +11,12 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <idrig/experiment_request_t.hpp>
+#include <idrig/experiment_status_t.hpp>
+#include <idrig/identify_request_t.hpp>
+#include <idrig/measurement_block_t.hpp>
+#include <idrig/result_ack_t.hpp>
+#include <idrig/service_status_t.hpp>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <set>
@@ -18,13 +24,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <idrig/experiment_request_t.hpp>
-#include <idrig/experiment_status_t.hpp>
-#include <idrig/identify_request_t.hpp>
-#include <idrig/measurement_block_t.hpp>
-#include <idrig/result_ack_t.hpp>
-#include <idrig/service_status_t.hpp>
 
 #include "core/catalog/catalog.h"
 #include "core/catalog/experiment_store.h"
@@ -82,8 +81,11 @@ std::string Dir(const std::string& name) {
 
 int LoggerRate(const std::string& bin, double seconds) {
   const std::string dir = Dir("logger");
-  const pid_t logger = Start({bin + "/idrig-logger", "--db", dir + "/experiments.db", "--url", kUrl}, dir + "/logger.log");
-  const pid_t lcm_logger = Start({"lcm-logger", "--lcm-url=" + kUrl, "-c", "IDRIG/bench/MEAS", "-q", dir + "/lcm.log"}, dir + "/lcm-logger.log");
+  const pid_t logger = Start(
+      {bin + "/idrig-logger", "--db", dir + "/experiments.db", "--url", kUrl}, dir + "/logger.log");
+  const pid_t lcm_logger =
+      Start({"lcm-logger", "--lcm-url=" + kUrl, "-c", "IDRIG/bench/MEAS", "-q", dir + "/lcm.log"},
+            dir + "/lcm-logger.log");
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
   auto t = MakeLcmTransport(kUrl);
   measurement_block_t block{};
@@ -94,7 +96,8 @@ int LoggerRate(const std::string& bin, double seconds) {
   block.n_outputs = 1;
   block.u.assign(9, {0.5});
   block.y.assign(9, {0.25});
-  std::printf("block size %d bytes; %s s per rate\n", block.getEncodedSize(), std::to_string(seconds).c_str());
+  std::printf("block size %d bytes; %s s per rate\n", block.getEncodedSize(),
+              std::to_string(seconds).c_str());
   std::printf("%10s %10s %14s %14s\n", "rate/s", "sent", "idrig-logger", "lcm-logger");
   int64_t experiment = 1;
   int64_t lcm_total = 0;
@@ -109,7 +112,8 @@ int LoggerRate(const std::string& bin, double seconds) {
       t->PublishMessage("IDRIG/bench/MEAS", block);
       // Paced in bursts of 20 messages (a sleeping sender leaves the cores to the receivers).
       if (k % 20 == 19)
-        std::this_thread::sleep_until(start + std::chrono::nanoseconds(static_cast<int64_t>(1e9 * (k + 1) / rate)));
+        std::this_thread::sleep_until(
+            start + std::chrono::nanoseconds(static_cast<int64_t>(1e9 * (k + 1) / rate)));
     }
     const double achieved = n / std::chrono::duration<double>(Clock::now() - start).count();
     std::this_thread::sleep_for(std::chrono::seconds(2));  // writers drain
@@ -123,16 +127,19 @@ int LoggerRate(const std::string& bin, double seconds) {
       lcm::LogFile log(dir + "/lcm.log", "r");
       while (const lcm::LogEvent* e = log.readNextEvent()) {
         measurement_block_t b;
-        if (e->channel == "IDRIG/bench/MEAS" && b.decode(e->data, 0, e->datalen) > 0 && b.experiment_id == experiment) ++lcm_count;
+        if (e->channel == "IDRIG/bench/MEAS" && b.decode(e->data, 0, e->datalen) > 0 &&
+            b.experiment_id == experiment)
+          ++lcm_count;
       }
     }
     lcm_total += lcm_count;
-    std::printf("%10d %10lld %13.2f%% %13.2f%%   (achieved %.0f/s)\n", rate, static_cast<long long>(n),
-                100.0 * stored / n, 100.0 * lcm_count / n, achieved);
+    std::printf("%10d %10lld %13.2f%% %13.2f%%   (achieved %.0f/s)\n", rate,
+                static_cast<long long>(n), 100.0 * stored / n, 100.0 * lcm_count / n, achieved);
     std::fflush(stdout);
     ++experiment;
   }
-  std::printf("idrig-logger peak memory (VmHWM): %ld kB; lcm-logger: %ld kB\n", PeakKb(logger), PeakKb(lcm_logger));
+  std::printf("idrig-logger peak memory (VmHWM): %ld kB; lcm-logger: %ld kB\n", PeakKb(logger),
+              PeakKb(lcm_logger));
   Stop(logger);
   Stop(lcm_logger);
   return 0;
@@ -141,20 +148,30 @@ int LoggerRate(const std::string& bin, double seconds) {
 struct Cluster {
   std::string dir;
   std::vector<pid_t> pids;
-  Cluster(const std::string& bin, const std::string& name, int workers, int rig_block, int excite_block) {
+  Cluster(const std::string& bin, const std::string& name, int workers, int rig_block,
+          int excite_block) {
     dir = Dir(name);
     WriteNewKeyFile(dir + "/hmac.key");
-    std::ofstream(dir + "/plant.json") << R"({"format":"idrig.model/1","kind":"tf","domain":"continuous","Ts":0,"num":[0.5,1],"den":[1,2.5,4,1.5]})";
-    std::ofstream(dir + "/rig.json") << "{\"rig_id\":\"bench\",\"model_file\":\"" << dir << "/plant.json\",\"noise_std\":0.001,\"key_file\":\""
-                                     << dir << "/hmac.key\",\"block_samples\":" << rig_block << ",\"max_abs\":5}";
-    std::ofstream(dir + "/excite.json") << "{\"rig_id\":\"bench\",\"key_file\":\"" << dir << "/hmac.key\",\"block_samples\":"
-                                        << excite_block << ",\"max_abs\":5,\"max_speed\":100000}";
-    pids.push_back(Start({bin + "/idrig-catalog", "--db", dir + "/catalog.db", "--url", kUrl}, dir + "/catalog.log"));
-    pids.push_back(Start({bin + "/idrig-logger", "--db", dir + "/experiments.db", "--url", kUrl}, dir + "/logger.log"));
-    pids.push_back(Start({bin + "/idrig-rig-sim", "--config", dir + "/rig.json", "--url", kUrl}, dir + "/rig.log"));
-    pids.push_back(Start({bin + "/idrig-excite", "--config", dir + "/excite.json", "--url", kUrl}, dir + "/excite.log"));
+    std::ofstream(dir + "/plant.json")
+        << R"({"format":"idrig.model/1","kind":"tf","domain":"continuous","Ts":0,"num":[0.5,1],"den":[1,2.5,4,1.5]})";
+    std::ofstream(dir + "/rig.json")
+        << "{\"rig_id\":\"bench\",\"model_file\":\"" << dir
+        << "/plant.json\",\"noise_std\":0.001,\"key_file\":\"" << dir
+        << "/hmac.key\",\"block_samples\":" << rig_block << ",\"max_abs\":5}";
+    std::ofstream(dir + "/excite.json") << "{\"rig_id\":\"bench\",\"key_file\":\"" << dir
+                                        << "/hmac.key\",\"block_samples\":" << excite_block
+                                        << ",\"max_abs\":5,\"max_speed\":100000}";
+    pids.push_back(Start({bin + "/idrig-catalog", "--db", dir + "/catalog.db", "--url", kUrl},
+                         dir + "/catalog.log"));
+    pids.push_back(Start({bin + "/idrig-logger", "--db", dir + "/experiments.db", "--url", kUrl},
+                         dir + "/logger.log"));
+    pids.push_back(Start({bin + "/idrig-rig-sim", "--config", dir + "/rig.json", "--url", kUrl},
+                         dir + "/rig.log"));
+    pids.push_back(Start({bin + "/idrig-excite", "--config", dir + "/excite.json", "--url", kUrl},
+                         dir + "/excite.log"));
     for (int w = 0; w < workers; ++w)
-      pids.push_back(Start({bin + "/idrig-worker", "--id", "bw" + std::to_string(w), "--url", kUrl}, dir + "/w.log"));
+      pids.push_back(Start({bin + "/idrig-worker", "--id", "bw" + std::to_string(w), "--url", kUrl},
+                           dir + "/w.log"));
   }
   ~Cluster() {
     for (pid_t p : pids) Stop(p);
@@ -176,13 +193,16 @@ struct Client {
       experiment_status_t s;
       if (Decode(d, n, &s, nullptr) && s.source == "rig") rig = s;
     });
-    t->Subscribe("IDRIG/bench/ACK", [&](const std::string&, const uint8_t* d, size_t n) {
-      result_ack_t a;
-      if (Decode(d, n, &a, nullptr) && !acks.count(a.request_id)) {
-        acks[a.request_id] = NowMicros();
-        ack_messages[a.request_id] = a;
-      }
-    }, 10000);
+    t->Subscribe(
+        "IDRIG/bench/ACK",
+        [&](const std::string&, const uint8_t* d, size_t n) {
+          result_ack_t a;
+          if (Decode(d, n, &a, nullptr) && !acks.count(a.request_id)) {
+            acks[a.request_id] = NowMicros();
+            ack_messages[a.request_id] = a;
+          }
+        },
+        10000);
   }
   void Experiment(int64_t id, const std::string& spec, double fs, double duration, double speed) {
     experiment_request_t r{};
@@ -197,7 +217,8 @@ struct Client {
     r.speed = speed;
     t->PublishMessage("IDRIG/bench/EXP_REQ", r);
   }
-  void Identify(int64_t request_id, int64_t experiment, const std::string& method, const std::string& options) {
+  void Identify(int64_t request_id, int64_t experiment, const std::string& method,
+                const std::string& options) {
     identify_request_t r{};
     r.utime = NowMicros();
     r.request_id = request_id;
@@ -212,30 +233,42 @@ struct Client {
 int Latency(const std::string& bin, int64_t samples) {
   Cluster cluster(bin, "latency", 1, 1000, 500);
   Client c;
-  if (!Until(*c.t, [&] { return c.services.size() >= 5; }, 10)) return 1;
+  if (!Until(
+          *c.t, [&] { return c.services.size() >= 5; }, 10))
+    return 1;
   const double fs = 1000.0;
-  std::printf("%lld samples at %.0f Hz in blocks of 1000 (16 KB)\n", static_cast<long long>(samples), fs);
+  std::printf("%lld samples at %.0f Hz in blocks of 1000 (16 KB)\n",
+              static_cast<long long>(samples), fs);
   int64_t request = 100;
   for (const char* method : {"arx", "arx-oe"}) {
     for (int run = 0; run < 3; ++run) {
       const int64_t experiment = 1000 + request;
       c.rig = experiment_status_t{};
       c.Experiment(experiment, "prbs:bits=12,amp=1", fs, samples / fs, 200.0);
-      if (!Until(*c.t, [&] { return c.rig.experiment_id == experiment && c.rig.state == experiment_status_t::STATE_DONE; }, 30)) {
+      if (!Until(
+              *c.t,
+              [&] {
+                return c.rig.experiment_id == experiment &&
+                       c.rig.state == experiment_status_t::STATE_DONE;
+              },
+              30)) {
         std::printf("experiment did not finish\n");
         return 1;
       }
       const int64_t end = c.rig.end_utime;
       c.Identify(++request, experiment, method, "{\"order\":3}");
-      if (!Until(*c.t, [&] { return c.acks.count(request) > 0; }, 30)) {
+      if (!Until(
+              *c.t, [&] { return c.acks.count(request) > 0; }, 30)) {
         std::printf("no ack\n");
         return 1;
       }
       Catalog catalog(cluster.dir + "/catalog.db", true);
       const auto m = catalog.ModelForRequest(request);
-      std::printf("%-7s run %d: end of experiment -> model committed %.3f s, -> ack heard %.3f s (compute %.3f s, %lld samples)\n",
-                  method, run + 1, 1e-6 * (m->created_utime - end), 1e-6 * (c.acks[request] - end), m->compute_s,
-                  static_cast<long long>(m->n_samples));
+      std::printf(
+          "%-7s run %d: end of experiment -> model committed %.3f s, -> ack heard %.3f s (compute "
+          "%.3f s, %lld samples)\n",
+          method, run + 1, 1e-6 * (m->created_utime - end), 1e-6 * (c.acks[request] - end),
+          m->compute_s, static_cast<long long>(m->n_samples));
       std::fflush(stdout);
     }
   }
@@ -248,26 +281,39 @@ int Jobs(const std::string& bin, int workers, int jobs, bool heavy) {
   const std::string method = heavy ? "arx-oe" : "arx";
   Cluster cluster(bin, "jobs" + std::to_string(workers), workers, 100, 50);
   Client c;
-  if (!Until(*c.t, [&] { return static_cast<int>(c.services.size()) >= 4 + workers; }, 10)) return 1;
+  if (!Until(
+          *c.t, [&] { return static_cast<int>(c.services.size()) >= 4 + workers; }, 10))
+    return 1;
   c.Experiment(77, "prbs:bits=9,amp=1", fs, 51.1, heavy ? 1000.0 : 200.0);
-  if (!Until(*c.t, [&] { return c.rig.experiment_id == 77 && c.rig.state == experiment_status_t::STATE_DONE; }, 20)) return 1;
-  Until(*c.t, [] { return false; }, 0.5);
+  if (!Until(
+          *c.t,
+          [&] {
+            return c.rig.experiment_id == 77 && c.rig.state == experiment_status_t::STATE_DONE;
+          },
+          20))
+    return 1;
+  Until(
+      *c.t, [] { return false; }, 0.5);
   const auto start = Clock::now();
   for (int j = 0; j < jobs; ++j) c.Identify(5000 + j, 77, method, "{\"order\":3}");
   auto last = Clock::now();
-  const bool ok = Until(*c.t, [&] {
-    if (Clock::now() - last > std::chrono::seconds(2)) {  // re-send lost requests
-      for (int j = 0; j < jobs; ++j)
-        if (!c.acks.count(5000 + j)) c.Identify(5000 + j, 77, method, "{\"order\":3}");
-      last = Clock::now();
-    }
-    return static_cast<int>(c.acks.size()) >= jobs;
-  }, 120);
+  const bool ok = Until(
+      *c.t,
+      [&] {
+        if (Clock::now() - last > std::chrono::seconds(2)) {  // re-send lost requests
+          for (int j = 0; j < jobs; ++j)
+            if (!c.acks.count(5000 + j)) c.Identify(5000 + j, 77, method, "{\"order\":3}");
+          last = Clock::now();
+        }
+        return static_cast<int>(c.acks.size()) >= jobs;
+      },
+      120);
   const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
   std::map<std::string, int> per_worker;
   for (const auto& [id, a] : c.ack_messages) ++per_worker[a.worker_id];
-  std::printf("%d worker(s): %d jobs (%s, %d samples) in %.2f s = %.1f jobs/s%s;", workers, jobs, method.c_str(),
-              static_cast<int>(fs * 51.1 + 0.5), elapsed, jobs / elapsed, ok ? "" : " (INCOMPLETE)");
+  std::printf("%d worker(s): %d jobs (%s, %d samples) in %.2f s = %.1f jobs/s%s;", workers, jobs,
+              method.c_str(), static_cast<int>(fs * 51.1 + 0.5), elapsed, jobs / elapsed,
+              ok ? "" : " (INCOMPLETE)");
   for (const auto& [w, n] : per_worker) std::printf(" %s %d", w.c_str(), n);
   Catalog catalog(cluster.dir + "/catalog.db", true);
   std::printf("; models stored %lld\n", static_cast<long long>(catalog.CountModels()));

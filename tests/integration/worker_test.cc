@@ -50,7 +50,9 @@ TEST(Worker, MissingOrInconsistentBlocksAreNamed) {
     AssembleRecord(blocks, 3);
     FAIL();
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("block 1 starts at sample 4, expected 3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("block 1 starts at sample 4, expected 3"),
+              std::string::npos)
+        << e.what();
   }
   EXPECT_THROW(AssembleRecord(blocks, 0), std::invalid_argument);
 }

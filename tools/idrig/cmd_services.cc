@@ -97,8 +97,9 @@ std::string PolesText(const std::map<std::string, double>& metrics) {
 
 void PrintModelTable(Catalog& catalog, const std::vector<ModelRecord>& models) {
   std::cout << std::left << std::setw(6) << "id" << std::setw(10) << "rig" << std::setw(18)
-            << "experiment" << std::setw(18) << "method" << std::setw(9) << "fit %"
-            << std::setw(21) << "stored (UTC)" << "poles [rad/s]\n";
+            << "experiment" << std::setw(18) << "method" << std::setw(9) << "fit %" << std::setw(21)
+            << "stored (UTC)"
+            << "poles [rad/s]\n";
   for (const auto& m : models) {
     const auto metrics = MetricMap(catalog, m.model_id);
     std::cout << std::left << std::setw(6) << m.model_id << std::setw(10) << m.rig_id
@@ -110,14 +111,21 @@ void PrintModelTable(Catalog& catalog, const std::vector<ModelRecord>& models) {
 
 void PrintModel(Catalog& catalog, const ModelRecord& m, bool json) {
   if (json) {
-    nlohmann::json j = {{"model_id", m.model_id}, {"request_id", m.request_id},
-                        {"rig_id", m.rig_id}, {"experiment_id", m.experiment_id},
-                        {"signal_spec", m.signal_spec}, {"method", m.method},
+    nlohmann::json j = {{"model_id", m.model_id},
+                        {"request_id", m.request_id},
+                        {"rig_id", m.rig_id},
+                        {"experiment_id", m.experiment_id},
+                        {"signal_spec", m.signal_spec},
+                        {"method", m.method},
                         {"options", nlohmann::json::parse(m.options_json, nullptr, false)},
-                        {"data_hash", m.data_hash}, {"n_samples", m.n_samples},
-                        {"sample_time_s", m.sample_time_s}, {"software_version", m.software_version},
-                        {"worker_id", m.worker_id}, {"created_utime", m.created_utime},
-                        {"compute_s", m.compute_s}, {"model", nlohmann::json::parse(m.model_json)}};
+                        {"data_hash", m.data_hash},
+                        {"n_samples", m.n_samples},
+                        {"sample_time_s", m.sample_time_s},
+                        {"software_version", m.software_version},
+                        {"worker_id", m.worker_id},
+                        {"created_utime", m.created_utime},
+                        {"compute_s", m.compute_s},
+                        {"model", nlohmann::json::parse(m.model_json)}};
     nlohmann::json metrics = nlohmann::json::object();
     for (const auto& x : catalog.Metrics(m.model_id)) metrics[x.name] = x.value;
     j["metrics"] = metrics;
@@ -133,8 +141,8 @@ void PrintModel(Catalog& catalog, const ModelRecord& m, bool json) {
             << m.status << "\n"
             << "  lineage: rig " << m.rig_id << ", experiment " << m.experiment_id << " ("
             << (m.signal_spec.empty() ? "signal unknown" : m.signal_spec) << "), " << m.n_samples
-            << " samples at Ts " << m.sample_time_s << " s, data sha256 " << m.data_hash.substr(0, 16)
-            << "…\n"
+            << " samples at Ts " << m.sample_time_s << " s, data sha256 "
+            << m.data_hash.substr(0, 16) << "…\n"
             << "           method " << m.method << " " << m.options_json << ", idrig "
             << m.software_version << ", worker " << m.worker_id << ", " << Number(m.compute_s, 3)
             << " s, stored " << TimeText(m.created_utime) << " UTC\n";
@@ -170,14 +178,19 @@ void PrintHistory(Catalog& catalog, const std::string& rig, const std::string& m
 void WriteHistorySvg(Catalog& catalog, const std::string& rig, const std::string& metric,
                      const std::string& method, const std::string& path) {
   const auto history = catalog.History(rig, metric, method);
-  if (history.empty()) throw std::invalid_argument("no model of rig '" + rig + "' has metric '" + metric + "'");
-  double t0 = history.front().first.created_utime * 1e-6, t1 = history.back().first.created_utime * 1e-6;
+  if (history.empty())
+    throw std::invalid_argument("no model of rig '" + rig + "' has metric '" + metric + "'");
+  double t0 = history.front().first.created_utime * 1e-6,
+         t1 = history.back().first.created_utime * 1e-6;
   double lo = history[0].second, hi = lo;
   for (const auto& h : history) {
     lo = std::min(lo, h.second);
     hi = std::max(hi, h.second);
   }
-  if (hi - lo < 1e-12) { lo -= 0.5; hi += 0.5; }
+  if (hi - lo < 1e-12) {
+    lo -= 0.5;
+    hi += 0.5;
+  }
   if (t1 - t0 < 1e-6) t1 = t0 + 1.0;
   const double w = 640, h = 320, m = 50;
   auto x = [&](double t) { return m + (w - 2 * m) * (t - t0) / (t1 - t0); };
@@ -186,17 +199,21 @@ void WriteHistorySvg(Catalog& catalog, const std::string& rig, const std::string
   if (!out) throw std::invalid_argument("cannot write '" + path + "'");
   out << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h << "'>\n"
       << "<rect width='100%' height='100%' fill='white'/>\n"
-      << "<text x='" << m << "' y='20' font-family='sans-serif' font-size='14'>" << metric << " of rig " << rig
-      << (method.empty() ? "" : " (" + method + ")") << ", " << TimeText(history.front().first.created_utime)
-      << " .. " << TimeText(history.back().first.created_utime) << " UTC</text>\n"
+      << "<text x='" << m << "' y='20' font-family='sans-serif' font-size='14'>" << metric
+      << " of rig " << rig << (method.empty() ? "" : " (" + method + ")") << ", "
+      << TimeText(history.front().first.created_utime) << " .. "
+      << TimeText(history.back().first.created_utime) << " UTC</text>\n"
       << "<text x='5' y='" << y(hi) + 4 << "' font-size='11'>" << Number(hi) << "</text>\n"
       << "<text x='5' y='" << y(lo) + 4 << "' font-size='11'>" << Number(lo) << "</text>\n"
       << "<polyline fill='none' stroke='steelblue' stroke-width='1.5' points='";
-  for (const auto& [model, value] : history) out << x(model.created_utime * 1e-6) << "," << y(value) << " ";
+  for (const auto& [model, value] : history)
+    out << x(model.created_utime * 1e-6) << "," << y(value) << " ";
   out << "'/>\n";
   for (const auto& [model, value] : history)
-    out << "<circle cx='" << x(model.created_utime * 1e-6) << "' cy='" << y(value) << "' r='3' fill='steelblue'>"
-        << "<title>model " << model.model_id << " " << model.method << ": " << Number(value, 6) << "</title></circle>\n";
+    out << "<circle cx='" << x(model.created_utime * 1e-6) << "' cy='" << y(value)
+        << "' r='3' fill='steelblue'>"
+        << "<title>model " << model.model_id << " " << model.method << ": " << Number(value, 6)
+        << "</title></circle>\n";
   out << "</svg>\n";
 }
 
@@ -204,7 +221,8 @@ bool MulticastWorks(const std::string& url) {
   try {
     auto t = MakeLcmTransport(url);
     bool received = false;
-    t->Subscribe("IDRIG_PROBE", [&](const std::string&, const uint8_t*, size_t) { received = true; });
+    t->Subscribe("IDRIG_PROBE",
+                 [&](const std::string&, const uint8_t*, size_t) { received = true; });
     const uint8_t byte = 1;
     if (t->Publish("IDRIG_PROBE", &byte, 1) != 0) return false;
     for (int i = 0; i < 10 && !received; ++i) t->Handle(50);
@@ -218,7 +236,10 @@ bool MulticastWorks(const std::string& url) {
 [[noreturn]] void ReexecInNetns() {
   setenv("IDRIG_IN_NETNS", "1", 1);
   std::vector<std::string> args = {
-      "unshare", geteuid() == 0 ? "-n" : "-rn", "sh", "-c",
+      "unshare",
+      geteuid() == 0 ? "-n" : "-rn",
+      "sh",
+      "-c",
       "ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo && exec \"$0\" \"$@\"",
       ExecutableDir() + "/idrig"};
   args.insert(args.end(), g_args.begin() + 1, g_args.end());
@@ -226,7 +247,8 @@ bool MulticastWorks(const std::string& url) {
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
   execvp("unshare", argv.data());
-  throw std::runtime_error("no multicast route here, and `unshare` could not be run (install util-linux)");
+  throw std::runtime_error(
+      "no multicast route here, and `unshare` could not be run (install util-linux)");
 }
 
 void WriteJson(const std::string& path, const nlohmann::json& j) {
@@ -262,19 +284,31 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
   plant.num = Eigen::Vector2d(0.5, 1.0);
   plant.den = Eigen::Vector4d(1.0, 2.5, 4.0, 1.5);
   WriteModelFile(plant, dir + "/plant.json");
-  WriteJson(dir + "/catalog.json", {{"db_path", dir + "/catalog.db"}, {"lease_s", 3.0}, {"offer_period_s", 0.5}});
+  WriteJson(dir + "/catalog.json",
+            {{"db_path", dir + "/catalog.db"}, {"lease_s", 3.0}, {"offer_period_s", 0.5}});
   WriteJson(dir + "/logger.json", {{"db_path", dir + "/experiments.db"}});
-  WriteJson(dir + "/rig_sim.json", {{"rig_id", rig}, {"model_file", dir + "/plant.json"},
-                                    {"noise_std", 0.005}, {"seed", 1}, {"max_abs", 5.0},
-                                    {"max_rate", 2000.0}, {"watchdog_s", 2.0}, {"block_samples", 100},
-                                    {"key_file", key_file}, {"key_id", 1}});
-  WriteJson(dir + "/excite.json", {{"rig_id", rig}, {"key_file", key_file}, {"key_id", 1},
-                                   {"block_samples", 20}, {"max_abs", 5.0}, {"max_rate", 2000.0}});
+  WriteJson(dir + "/rig_sim.json", {{"rig_id", rig},
+                                    {"model_file", dir + "/plant.json"},
+                                    {"noise_std", 0.005},
+                                    {"seed", 1},
+                                    {"max_abs", 5.0},
+                                    {"max_rate", 2000.0},
+                                    {"watchdog_s", 2.0},
+                                    {"block_samples", 100},
+                                    {"key_file", key_file},
+                                    {"key_id", 1}});
+  WriteJson(dir + "/excite.json", {{"rig_id", rig},
+                                   {"key_file", key_file},
+                                   {"key_id", 1},
+                                   {"block_samples", 20},
+                                   {"max_abs", 5.0},
+                                   {"max_rate", 2000.0}});
   WriteJson(dir + "/worker.json", {{"renew_s", 0.5}, {"replay_retry_s", 0.3}});
 
   const std::string bin = ExecutableDir();
   std::vector<ChildProcess> children;
-  auto spawn = [&](const std::string& name, const std::string& program, std::vector<std::string> args) {
+  auto spawn = [&](const std::string& name, const std::string& program,
+                   std::vector<std::string> args) {
     args.push_back("--url");
     args.push_back(url);
     children.push_back(Spawn(name, bin + "/" + program, args, dir + "/logs/" + name + ".log"));
@@ -303,7 +337,8 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
   }
   if (client.services().size() < expected)
     throw std::runtime_error("only " + std::to_string(client.services().size()) + " of " +
-                             std::to_string(expected) + " services reported status; see " + dir + "/logs");
+                             std::to_string(expected) + " services reported status; see " + dir +
+                             "/logs");
   std::cout << "[1/4] services up:";
   for (const auto& [id, s] : client.services()) std::cout << " " << id << "(pid " << s.pid << ")";
   std::cout << "\n";
@@ -320,10 +355,11 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
   std::cout << "[2/4] experiments on rig " << rig << " (simulated time x" << speed << "):\n";
   for (auto& e : experiments) {
     e.id = NewId();
-    const int64_t request_id = client.StartExperiment(rig, e.id, e.spec, e.fs, e.duration, speed, 0.0);
+    const int64_t request_id =
+        client.StartExperiment(rig, e.id, e.spec, e.fs, e.duration, speed, 0.0);
     auto last_request = std::chrono::steady_clock::now();
-    const auto deadline = std::chrono::steady_clock::now() +
-                          std::chrono::duration<double>(e.duration / speed + 20.0);
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(e.duration / speed + 20.0);
     int last_percent = -1;
     for (;;) {
       client.Spin(100);
@@ -339,17 +375,20 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
       const int64_t total = ex ? ex->samples_total : 0;
       const int64_t done = rs ? rs->samples_done : 0;
       const int percent = total > 0 ? static_cast<int>(100 * done / total) : 0;
-      if (percent / 10 != last_percent / 10 || (rs && rs->state != experiment_status_t::STATE_RUNNING)) {
+      if (percent / 10 != last_percent / 10 ||
+          (rs && rs->state != experiment_status_t::STATE_RUNNING)) {
         last_percent = percent;
         std::cout << "  " << std::setw(9) << std::left << e.label << " experiment " << e.id << "  "
                   << std::string(percent / 5, '#') << std::string(20 - percent / 5, '.') << " "
-                  << done << "/" << total << " samples\n" << std::flush;
+                  << done << "/" << total << " samples\n"
+                  << std::flush;
       }
       if (rs && rs->state != experiment_status_t::STATE_RUNNING &&
           rs->state != experiment_status_t::STATE_PENDING) {
         if (rs->state != experiment_status_t::STATE_DONE)
-          throw std::runtime_error("experiment ended " + std::string(ExperimentStateName(rs->state)) +
-                                   ": " + rs->message);
+          throw std::runtime_error("experiment ended " +
+                                   std::string(ExperimentStateName(rs->state)) + ": " +
+                                   rs->message);
         std::cout << "  " << e.label << ": done, " << rs->samples_total << " samples in "
                   << rs->blocks_total << " blocks\n";
         break;
@@ -365,8 +404,12 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
       {NewId(), experiments[0].id, "step", "arx", "{\"order\":3}"},
       {NewId(), experiments[1].id, "multisine", "arx-oe", "{\"order\":3}"},
       {NewId(), experiments[1].id, "multisine", "finite-frequency",
-       nlohmann::json({{"order", 3}, {"numerator_degree", 1}, {"base_omega", wb},
-                       {"multiples", {1, 3, 9}}, {"skip_base_periods", 1}}).dump()},
+       nlohmann::json({{"order", 3},
+                       {"numerator_degree", 1},
+                       {"base_omega", wb},
+                       {"multiples", {1, 3, 9}},
+                       {"skip_base_periods", 1}})
+           .dump()},
   };
   std::cout << "[3/4] identification jobs (claimed by the workers, stored by the catalogue):\n";
   const auto start = std::chrono::steady_clock::now();
@@ -384,10 +427,12 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
       auto ack = client.acks().find(j.request_id);
       if (ack == client.acks().end() || reported.count(j.request_id)) continue;
       reported.insert(j.request_id);
-      const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      const double t =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       std::cout << "  " << std::setw(9) << std::left << j.label << " " << std::setw(17) << j.method
-                << (ack->second.model_id > 0 ? "stored as model " + std::to_string(ack->second.model_id)
-                                             : std::string("FAILED (see idrig models list)"))
+                << (ack->second.model_id > 0
+                        ? "stored as model " + std::to_string(ack->second.model_id)
+                        : std::string("FAILED (see idrig models list)"))
                 << " by " << ack->second.worker_id << " after " << Number(t, 3) << " s\n";
     }
     if (std::chrono::steady_clock::now() - start > std::chrono::seconds(90))
@@ -401,14 +446,16 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
     auto m = catalog.ModelForRequest(j.request_id);
     if (!m) {
       auto job = catalog.Job(j.request_id);
-      std::cout << j.label << " / " << j.method << ": failed: " << (job ? job->message : "?") << "\n\n";
+      std::cout << j.label << " / " << j.method << ": failed: " << (job ? job->message : "?")
+                << "\n\n";
       continue;
     }
     std::cout << j.label << " / " << j.method << ": ";
     PrintModel(catalog, *m, false);
     std::cout << "\n";
   }
-  std::cout << "true plant: W = (0.5 s + 1) / (s^3 + 2.5 s^2 + 4 s + 1.5), poles -0.5, -1+-1.414j\n\n";
+  std::cout
+      << "true plant: W = (0.5 s + 1) / (s^3 + 2.5 s^2 + 4 s + 1.5), poles -0.5, -1+-1.414j\n\n";
   std::cout << "all models of rig " << rig << " (every demo run adds to the history):\n";
   PrintModelTable(catalog, catalog.Models(rig));
   std::cout << "\n";
@@ -416,7 +463,8 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
   std::cout << "\nnext: build/bin/idrig models list --db " << dir << "/catalog.db\n"
             << "      build/bin/idrig models history --db " << dir << "/catalog.db --rig " << rig
             << " --param wn_2\n"
-            << "      sqlite3 " << dir << "/catalog.db 'SELECT model_id, method, data_hash FROM models'\n";
+            << "      sqlite3 " << dir
+            << "/catalog.db 'SELECT model_id, method, data_hash FROM models'\n";
 }
 
 }  // namespace
@@ -434,15 +482,22 @@ void RegisterServiceCommands(CLI::App& app) {
     };
     auto args = std::make_shared<Args>();
     auto* cmd = app.add_subcommand(
-        "demo", "start every service on a private LCM URL, run a step and a multisine experiment "
-                "on the simulated rig, identify with two methods each, and print the stored models "
-                "with their history");
-    cmd->add_option("--dir", args->dir, "directory for the catalogue, experiment store, configs, logs");
-    cmd->add_option("--port", args->port, "UDP port of the private udpm URL (ttl=0)")->check(CLI::Range(1024, 65535));
-    cmd->add_option("--speed", args->speed, "simulated time / wall time")->check(CLI::Range(1.0, 1000.0));
-    cmd->add_option("--workers", args->workers, "number of idrig-worker processes")->check(CLI::Range(1, 8));
-    cmd->add_flag("--no-netns", args->no_netns, "do not re-run inside `unshare -n` when multicast is missing");
-    cmd->callback([args] { RunDemo(args->dir, args->port, args->speed, args->workers, !args->no_netns); });
+        "demo",
+        "start every service on a private LCM URL, run a step and a multisine experiment "
+        "on the simulated rig, identify with two methods each, and print the stored models "
+        "with their history");
+    cmd->add_option("--dir", args->dir,
+                    "directory for the catalogue, experiment store, configs, logs");
+    cmd->add_option("--port", args->port, "UDP port of the private udpm URL (ttl=0)")
+        ->check(CLI::Range(1024, 65535));
+    cmd->add_option("--speed", args->speed, "simulated time / wall time")
+        ->check(CLI::Range(1.0, 1000.0));
+    cmd->add_option("--workers", args->workers, "number of idrig-worker processes")
+        ->check(CLI::Range(1, 8));
+    cmd->add_flag("--no-netns", args->no_netns,
+                  "do not re-run inside `unshare -n` when multicast is missing");
+    cmd->callback(
+        [args] { RunDemo(args->dir, args->port, args->speed, args->workers, !args->no_netns); });
   }
   // ---- experiment start|status|stop
   {
@@ -455,18 +510,24 @@ void RegisterServiceCommands(CLI::App& app) {
       bool wait = false;
     };
     auto args = std::make_shared<Args>();
-    auto* start = group->add_subcommand("start", "publish an experiment request (prints the experiment id)");
-    auto* status = group->add_subcommand("status", "listen for experiment status and print the latest");
-    auto* stop = group->add_subcommand("stop", "stop a running experiment (the rig goes to its safe input)");
+    auto* start =
+        group->add_subcommand("start", "publish an experiment request (prints the experiment id)");
+    auto* status =
+        group->add_subcommand("status", "listen for experiment status and print the latest");
+    auto* stop =
+        group->add_subcommand("stop", "stop a running experiment (the rig goes to its safe input)");
     for (auto* c : {start, status, stop}) {
       c->add_option("--url", args->url, "LCM URL (default $LCM_DEFAULT_URL or udpm ttl=0)");
       c->add_option("--rig", args->rig, "rig id");
     }
     start->add_option("--signal", args->signal, "excitation SPEC (docs/excitation.md)")->required();
     start->add_option("--fs", args->fs, "sample rate [Hz]")->check(CLI::PositiveNumber);
-    start->add_option("--duration", args->duration, "experiment length [s]")->check(CLI::PositiveNumber);
-    start->add_option("--speed", args->speed, "experiment time / wall time (simulated rigs)")->check(CLI::PositiveNumber);
-    start->add_option("--max-abs", args->max_abs, "lower |u| limit for this experiment")->check(CLI::NonNegativeNumber);
+    start->add_option("--duration", args->duration, "experiment length [s]")
+        ->check(CLI::PositiveNumber);
+    start->add_option("--speed", args->speed, "experiment time / wall time (simulated rigs)")
+        ->check(CLI::PositiveNumber);
+    start->add_option("--max-abs", args->max_abs, "lower |u| limit for this experiment")
+        ->check(CLI::NonNegativeNumber);
     start->add_option("--experiment", args->experiment, "experiment id (default: from the clock)");
     start->add_flag("--wait", args->wait, "wait until the rig reports the end");
     status->add_option("--experiment", args->experiment, "only this experiment");
@@ -484,15 +545,17 @@ void RegisterServiceCommands(CLI::App& app) {
         client.Spin(200);
         const auto* ex = client.ExperimentStatus(args->rig, id, "excite");
         if (!ex && i % 5 == 4)  // not heard of yet: the same request again (idempotent)
-          client.StartExperiment(args->rig, id, args->signal, args->fs, args->duration,
-                                 args->speed, args->max_abs, request_id);
+          client.StartExperiment(args->rig, id, args->signal, args->fs, args->duration, args->speed,
+                                 args->max_abs, request_id);
         const auto* rs = client.ExperimentStatus(args->rig, id, "rig");
         if (ex && ex->state == experiment_status_t::STATE_FAILED)
           throw std::invalid_argument("experiment refused: " + ex->message);
         if (rs && rs->state >= experiment_status_t::STATE_DONE) {
           std::cerr << "experiment " << id << " " << ExperimentStateName(rs->state) << ": "
-                    << rs->samples_total << " samples, " << rs->blocks_total << " blocks " << rs->message << "\n";
-          if (rs->state != experiment_status_t::STATE_DONE) throw std::runtime_error("experiment did not complete");
+                    << rs->samples_total << " samples, " << rs->blocks_total << " blocks "
+                    << rs->message << "\n";
+          if (rs->state != experiment_status_t::STATE_DONE)
+            throw std::runtime_error("experiment did not complete");
           return;
         }
         if (i == 0 && !ex) std::cerr << "waiting for idrig-excite on rig " << args->rig << "…\n";
@@ -503,15 +566,19 @@ void RegisterServiceCommands(CLI::App& app) {
       client.Spin(static_cast<int>(args->seconds * 1000));
       int shown = 0;
       for (const auto& [key, s] : client.experiments()) {
-        if (s.rig_id != args->rig || (args->experiment && s.experiment_id != args->experiment)) continue;
+        if (s.rig_id != args->rig || (args->experiment && s.experiment_id != args->experiment))
+          continue;
         std::cout << s.rig_id << " experiment " << s.experiment_id << " [" << s.source << "] "
                   << ExperimentStateName(s.state) << " " << s.samples_done << "/" << s.samples_total
-                  << " samples" << (s.source == "rig" ? ", " + std::to_string(s.blocks_total) + " blocks" : "")
+                  << " samples"
+                  << (s.source == "rig" ? ", " + std::to_string(s.blocks_total) + " blocks" : "")
                   << (s.signal_spec.empty() ? "" : ", " + s.signal_spec)
                   << (s.message.empty() ? "" : " — " + s.message) << "\n";
         ++shown;
       }
-      if (!shown) std::cout << "no experiment status heard on rig " << args->rig << " within " << args->seconds << " s\n";
+      if (!shown)
+        std::cout << "no experiment status heard on rig " << args->rig << " within "
+                  << args->seconds << " s\n";
     });
     stop->callback([args] {
       ServiceClient client(args->url);
@@ -530,12 +597,17 @@ void RegisterServiceCommands(CLI::App& app) {
       bool json = false, wait = false;
     };
     auto args = std::make_shared<Args>();
-    auto* request = group->add_subcommand("request", "ask the workers to identify a model from an experiment");
+    auto* request =
+        group->add_subcommand("request", "ask the workers to identify a model from an experiment");
     auto* list = group->add_subcommand("list", "models in the catalogue, oldest first");
     auto* show = group->add_subcommand("show", "one model with its lineage and metrics");
-    auto* history = group->add_subcommand("history", "a parameter (pole, natural frequency, ...) over time for a rig");
-    auto* export_cmd = group->add_subcommand("export", "write a model as idrig.model/1 JSON (with its lineage under \"identification\")");
-    auto* compare = group->add_subcommand("compare", "two models side by side: lineage and metrics");
+    auto* history = group->add_subcommand(
+        "history", "a parameter (pole, natural frequency, ...) over time for a rig");
+    auto* export_cmd = group->add_subcommand(
+        "export",
+        "write a model as idrig.model/1 JSON (with its lineage under \"identification\")");
+    auto* compare =
+        group->add_subcommand("compare", "two models side by side: lineage and metrics");
     auto other = std::make_shared<int64_t>(0);
     auto out = std::make_shared<std::string>();
     export_cmd->add_option("id", args->id, "model id")->required();
@@ -547,7 +619,8 @@ void RegisterServiceCommands(CLI::App& app) {
     request->add_option("--url", args->url, "LCM URL");
     request->add_option("--rig", args->rig, "rig id")->required();
     request->add_option("--experiment", args->experiment, "experiment id")->required();
-    request->add_option("--method", args->method, "method name (idrig identify --help)")->required();
+    request->add_option("--method", args->method, "method name (idrig identify --help)")
+        ->required();
     request->add_option("--options", args->options, "method options as a JSON object");
     request->add_flag("--wait", args->wait, "wait for the catalogue's acknowledgement");
     list->add_option("--rig", args->rig, "only this rig");
@@ -572,11 +645,14 @@ void RegisterServiceCommands(CLI::App& app) {
         client.Spin(100);
         auto ack = client.acks().find(id);
         if (ack != client.acks().end()) {
-          std::cerr << (ack->second.model_id ? "stored as model " + std::to_string(ack->second.model_id)
-                                             : std::string("failed (see the catalogue's jobs table)")) << "\n";
+          std::cerr << (ack->second.model_id
+                            ? "stored as model " + std::to_string(ack->second.model_id)
+                            : std::string("failed (see the catalogue's jobs table)"))
+                    << "\n";
           return;
         }
-        if (i % 20 == 19) client.RequestIdentify(args->rig, id, args->experiment, args->method, args->options);
+        if (i % 20 == 19)
+          client.RequestIdentify(args->rig, id, args->experiment, args->method, args->options);
       }
       if (args->wait) throw std::runtime_error("no acknowledgement within 60 s");
     });
@@ -587,19 +663,26 @@ void RegisterServiceCommands(CLI::App& app) {
     show->callback([args] {
       Catalog catalog(args->db, true);
       auto m = catalog.Model(args->id);
-      if (!m) throw std::invalid_argument("no model " + std::to_string(args->id) + " in " + args->db);
+      if (!m)
+        throw std::invalid_argument("no model " + std::to_string(args->id) + " in " + args->db);
       PrintModel(catalog, *m, args->json);
     });
     export_cmd->callback([args, out] {
       Catalog catalog(args->db, true);
       auto m = catalog.Model(args->id);
-      if (!m) throw std::invalid_argument("no model " + std::to_string(args->id) + " in " + args->db);
+      if (!m)
+        throw std::invalid_argument("no model " + std::to_string(args->id) + " in " + args->db);
       nlohmann::json j = nlohmann::json::parse(m->model_json);
-      j["identification"] = {{"model_id", m->model_id}, {"rig_id", m->rig_id},
-                             {"experiment_id", m->experiment_id}, {"signal_spec", m->signal_spec},
-                             {"method", m->method}, {"options", nlohmann::json::parse(m->options_json, nullptr, false)},
-                             {"data_hash", m->data_hash}, {"software_version", m->software_version},
-                             {"created_utime", m->created_utime}, {"fit_percent", m->fit_percent}};
+      j["identification"] = {{"model_id", m->model_id},
+                             {"rig_id", m->rig_id},
+                             {"experiment_id", m->experiment_id},
+                             {"signal_spec", m->signal_spec},
+                             {"method", m->method},
+                             {"options", nlohmann::json::parse(m->options_json, nullptr, false)},
+                             {"data_hash", m->data_hash},
+                             {"software_version", m->software_version},
+                             {"created_utime", m->created_utime},
+                             {"fit_percent", m->fit_percent}};
       if (out->empty()) {
         std::cout << j.dump(2) << "\n";
       } else {
@@ -611,9 +694,12 @@ void RegisterServiceCommands(CLI::App& app) {
     compare->callback([args, other] {
       Catalog catalog(args->db, true);
       auto a = catalog.Model(args->id), b = catalog.Model(*other);
-      if (!a || !b) throw std::invalid_argument("no model " + std::to_string(!a ? args->id : *other) + " in " + args->db);
+      if (!a || !b)
+        throw std::invalid_argument("no model " + std::to_string(!a ? args->id : *other) + " in " +
+                                    args->db);
       const auto ma = MetricMap(catalog, a->model_id), mb = MetricMap(catalog, b->model_id);
-      std::cout << std::left << std::setw(16) << "" << std::setw(28) << ("model " + std::to_string(a->model_id))
+      std::cout << std::left << std::setw(16) << "" << std::setw(28)
+                << ("model " + std::to_string(a->model_id))
                 << ("model " + std::to_string(b->model_id)) << "\n";
       auto row = [](const std::string& name, const std::string& x, const std::string& y) {
         std::cout << std::left << std::setw(16) << name << std::setw(28) << x << y << "\n";
@@ -650,22 +736,27 @@ void RegisterServiceCommands(CLI::App& app) {
       ServiceClient client(args->url);
       client.Spin(static_cast<int>(args->seconds * 1000));
       for (const auto& [id, s] : client.services())
-        std::cout << std::left << std::setw(28) << id << std::setw(8) << s.state << " host " << s.host
-                  << " pid " << s.pid << " up " << Number(s.uptime_s, 3) << " s  recv " << s.received
-                  << " sent " << s.published << " dropped " << s.dropped << " bad "
+        std::cout << std::left << std::setw(28) << id << std::setw(8) << s.state << " host "
+                  << s.host << " pid " << s.pid << " up " << Number(s.uptime_s, 3) << " s  recv "
+                  << s.received << " sent " << s.published << " dropped " << s.dropped << " bad "
                   << (s.undecodable + s.foreign + s.oversized) << " refused "
-                  << (s.unsigned_count + s.forged + s.replayed + s.over_limit) << "\n    " << s.details_json << "\n";
-      if (client.services().empty()) std::cout << "no service status heard within " << args->seconds << " s\n";
+                  << (s.unsigned_count + s.forged + s.replayed + s.over_limit) << "\n    "
+                  << s.details_json << "\n";
+      if (client.services().empty())
+        std::cout << "no service status heard within " << args->seconds << " s\n";
     });
   }
   // ---- spy
   {
     auto url = std::make_shared<std::string>(DefaultLcmUrl());
-    auto* cmd = app.add_subcommand("spy", "lcm-spy with idrig's message types (java directly: Debian's wrapper fails on Java 17)");
+    auto* cmd = app.add_subcommand(
+        "spy",
+        "lcm-spy with idrig's message types (java directly: Debian's wrapper fails on Java 17)");
     cmd->add_option("--url", *url, "LCM URL");
     cmd->callback([url] {
       std::string jar = IDRIG_TYPES_JAR;
-      if (jar.empty() || access(jar.c_str(), R_OK) != 0) jar = ExecutableDir() + "/../share/java/idrig_lcmtypes.jar";
+      if (jar.empty() || access(jar.c_str(), R_OK) != 0)
+        jar = ExecutableDir() + "/../share/java/idrig_lcmtypes.jar";
       if (access(jar.c_str(), R_OK) != 0)
         throw std::runtime_error("idrig's types jar is not built (needs a JDK): " + jar);
       const std::string cp = "/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:" + jar;

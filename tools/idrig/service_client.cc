@@ -7,11 +7,10 @@
 
 #include <chrono>
 #include <cstdlib>
-#include <stdexcept>
-#include <thread>
-
 #include <idrig/experiment_request_t.hpp>
 #include <idrig/identify_request_t.hpp>
+#include <stdexcept>
+#include <thread>
 
 #include "core/transport/channels.h"
 
@@ -24,35 +23,39 @@ std::string DefaultLcmUrl() {
 }
 
 ServiceClient::ServiceClient(const std::string& url) : transport_(MakeLcmTransport(url)) {
-  transport_->Subscribe(AnyRigChannel(ChannelKind::kExperimentStatus),
-                        [this](const std::string&, const uint8_t* d, size_t n) {
-                          experiment_status_t s;
-                          if (!Decode(d, n, &s, &transport_->counters())) return;
-                          auto& slot = experiments_[{s.rig_id, s.experiment_id, s.source}];
-                          if (s.utime >= slot.utime) slot = s;
-                        },
-                        1000);
-  transport_->Subscribe(kAnyStatusChannel,
-                        [this](const std::string&, const uint8_t* d, size_t n) {
-                          service_status_t s;
-                          if (!Decode(d, n, &s, &transport_->counters())) return;
-                          services_[s.instance_id] = s;
-                        },
-                        1000);
-  transport_->Subscribe(AnyRigChannel(ChannelKind::kAck),
-                        [this](const std::string&, const uint8_t* d, size_t n) {
-                          result_ack_t a;
-                          if (!Decode(d, n, &a, &transport_->counters())) return;
-                          acks_[a.request_id] = a;
-                        },
-                        1000);
+  transport_->Subscribe(
+      AnyRigChannel(ChannelKind::kExperimentStatus),
+      [this](const std::string&, const uint8_t* d, size_t n) {
+        experiment_status_t s;
+        if (!Decode(d, n, &s, &transport_->counters())) return;
+        auto& slot = experiments_[{s.rig_id, s.experiment_id, s.source}];
+        if (s.utime >= slot.utime) slot = s;
+      },
+      1000);
+  transport_->Subscribe(
+      kAnyStatusChannel,
+      [this](const std::string&, const uint8_t* d, size_t n) {
+        service_status_t s;
+        if (!Decode(d, n, &s, &transport_->counters())) return;
+        services_[s.instance_id] = s;
+      },
+      1000);
+  transport_->Subscribe(
+      AnyRigChannel(ChannelKind::kAck),
+      [this](const std::string&, const uint8_t* d, size_t n) {
+        result_ack_t a;
+        if (!Decode(d, n, &a, &transport_->counters())) return;
+        acks_[a.request_id] = a;
+      },
+      1000);
 }
 
 void ServiceClient::Spin(int ms) {
   const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
   while (std::chrono::steady_clock::now() < end) {
     const int left = static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(
-                                          end - std::chrono::steady_clock::now()).count());
+                                          end - std::chrono::steady_clock::now())
+                                          .count());
     transport_->Handle(std::max(1, std::min(left, 50)));
   }
 }
@@ -67,11 +70,16 @@ int64_t NewId() {
 
 const char* ExperimentStateName(int32_t state) {
   switch (state) {
-    case experiment_status_t::STATE_PENDING: return "pending";
-    case experiment_status_t::STATE_RUNNING: return "running";
-    case experiment_status_t::STATE_DONE: return "done";
-    case experiment_status_t::STATE_STOPPED: return "stopped";
-    case experiment_status_t::STATE_FAILED: return "failed";
+    case experiment_status_t::STATE_PENDING:
+      return "pending";
+    case experiment_status_t::STATE_RUNNING:
+      return "running";
+    case experiment_status_t::STATE_DONE:
+      return "done";
+    case experiment_status_t::STATE_STOPPED:
+      return "stopped";
+    case experiment_status_t::STATE_FAILED:
+      return "failed";
   }
   return "unknown";
 }

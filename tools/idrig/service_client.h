@@ -1,15 +1,14 @@
 #pragma once
 // What the command line needs to talk to the services: publish requests, collect the latest
 // experiment and service status, spawn and stop service processes (idrig demo).
+#include <idrig/experiment_status_t.hpp>
+#include <idrig/result_ack_t.hpp>
+#include <idrig/service_status_t.hpp>
 #include <map>
 #include <memory>
 #include <string>
 #include <tuple>
 #include <vector>
-
-#include <idrig/experiment_status_t.hpp>
-#include <idrig/result_ack_t.hpp>
-#include <idrig/service_status_t.hpp>
 
 #include "core/transport/transport.h"
 
@@ -35,8 +34,10 @@ class ServiceClient {
   // Latest status of an experiment from a source ("excite" or "rig"); nullptr if none heard.
   const experiment_status_t* ExperimentStatus(const std::string& rig, int64_t experiment_id,
                                               const std::string& source) const;
-  const std::map<std::tuple<std::string, int64_t, std::string>, experiment_status_t>&
-  experiments() const { return experiments_; }
+  const std::map<std::tuple<std::string, int64_t, std::string>, experiment_status_t>& experiments()
+      const {
+    return experiments_;
+  }
   const std::map<std::string, service_status_t>& services() const { return services_; }
   const std::map<int64_t, result_ack_t>& acks() const { return acks_; }
 

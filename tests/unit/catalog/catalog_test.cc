@@ -1,11 +1,12 @@
 // The SQLite catalogue on a temporary file: migrations, idempotent model storage, job leases,
 // history of a metric, lineage; and the logger's experiment store with gap detection.
+#include "core/catalog/catalog.h"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <cstdio>
 
-#include "core/catalog/catalog.h"
 #include "core/catalog/experiment_store.h"
 
 namespace idrig {
@@ -34,9 +35,13 @@ ModelRecord Model(int64_t request_id, double pole) {
   m.status = "converged";
   // W(s) = 1/(s - pole): one real pole, DC gain -1/pole.
   nlohmann::json report = {{"fit_percent", 95.0},
-                           {"model", {{"format", "idrig.model/1"}, {"kind", "tf"},
-                                      {"domain", "continuous"}, {"Ts", 0.0},
-                                      {"num", {1.0}}, {"den", {1.0, -pole}}}}};
+                           {"model",
+                            {{"format", "idrig.model/1"},
+                             {"kind", "tf"},
+                             {"domain", "continuous"},
+                             {"Ts", 0.0},
+                             {"num", {1.0}},
+                             {"den", {1.0, -pole}}}}};
   m.model_json = report["model"].dump();
   m.report_json = report.dump();
   return m;
@@ -143,7 +148,10 @@ TEST(Catalog, DiagnosisReportsAreIdempotent) {
 
 TEST(Catalog, NotACatalogueIsAnError) {
   const std::string path = TempPath("catalog_empty");
-  { SqliteDatabase db(path); db.Exec("CREATE TABLE x(a)"); }
+  {
+    SqliteDatabase db(path);
+    db.Exec("CREATE TABLE x(a)");
+  }
   EXPECT_THROW(Catalog(path, true), std::runtime_error);
   EXPECT_THROW(Catalog("/nonexistent/dir/catalog.db"), std::runtime_error);
 }

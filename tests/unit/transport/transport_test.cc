@@ -1,5 +1,7 @@
 // Transport over memq://, channel names, and command signing: forged, replayed, unsigned and
 // unknown-key commands are refused; undecodable and foreign messages are counted, not thrown.
+#include "core/transport/transport.h"
+
 #include <gtest/gtest.h>
 
 #include <idrig/actuator_command_t.hpp>
@@ -7,7 +9,6 @@
 
 #include "core/transport/channels.h"
 #include "core/transport/signing.h"
-#include "core/transport/transport.h"
 
 namespace idrig {
 namespace {
