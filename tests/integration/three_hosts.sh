@@ -18,6 +18,14 @@ cleanup() { bash "$script" stop "$name" "$dir" || true; bash "$script" down "$na
 trap cleanup EXIT
 bash "$script" up "$name"
 bash "$script" run "$name" "$bin" "$dir" "$loss" > "$dir/out.txt" 2>&1 || { cat "$dir/out.txt" "$dir"/logs/*.log; exit 1; }
+# The workers may have heard every block while the logger lost some: give the logger's repair
+# (RIG_REPLAY_REQ to the rig every 0.5 s) up to 10 s to complete its record before stopping.
+for _ in $(seq 50); do
+  total=$(sqlite3 -batch -noheader "$dir/experiments.db" 'SELECT max(blocks_total) FROM experiments' 2>/dev/null || echo 0)
+  have=$(sqlite3 -batch -noheader "$dir/experiments.db" 'SELECT count(*) FROM blocks' 2>/dev/null || echo -1)
+  [ -n "$total" ] && [ "$total" != 0 ] && [ "$have" = "$total" ] && break
+  sleep 0.2
+done
 bash "$script" stop "$name" "$dir"
 fail() { echo "FAIL: $*"; cat "$dir/out.txt"; exit 1; }
 q() { sqlite3 -batch -noheader "$dir/$1" "$2"; }
