@@ -83,8 +83,15 @@ JSON
 
 stop() {
   dir=$(readlink -f "${3:?work dir}")
-  [ -f "$dir/pids" ] && while read -r pid; do kill "$pid" 2>/dev/null || true; done < "$dir/pids"
-  wait 2>/dev/null || true
+  [ -f "$dir/pids" ] || return 0
+  while read -r pid; do kill "$pid" 2>/dev/null || true; done < "$dir/pids"
+  # They are not our children here: wait until they are gone (databases closed).
+  for _ in $(seq 50); do
+    alive=0
+    while read -r pid; do kill -0 "$pid" 2>/dev/null && alive=1; done < "$dir/pids"
+    [ "$alive" = 0 ] && break
+    sleep 0.1
+  done
 }
 
 case "$cmd" in

@@ -12,7 +12,7 @@ dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 unshare -n sh -c 'ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" demo --no-netns --dir "$1" --speed 100' "$idrig" "$dir/demo" > "$dir/out.txt" 2>&1 || { cat "$dir/out.txt"; exit 1; }
 db="$dir/demo/catalog.db"
-q() { sqlite3 -batch -noheader "$db" "$1"; }
+q() { sqlite3 -batch -noheader -cmd ".timeout 5000" "$db" "$1"; }
 fail() { echo "FAIL: $*"; cat "$dir/out.txt"; exit 1; }
 
 [ "$(q 'PRAGMA integrity_check')" = ok ] || fail "integrity_check"

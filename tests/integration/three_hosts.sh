@@ -21,14 +21,14 @@ bash "$script" run "$name" "$bin" "$dir" "$loss" > "$dir/out.txt" 2>&1 || { cat 
 # The workers may have heard every block while the logger lost some: give the logger's repair
 # (RIG_REPLAY_REQ to the rig every 0.5 s) up to 10 s to complete its record before stopping.
 for _ in $(seq 50); do
-  total=$(sqlite3 -batch -noheader "$dir/experiments.db" 'SELECT max(blocks_total) FROM experiments' 2>/dev/null || echo 0)
-  have=$(sqlite3 -batch -noheader "$dir/experiments.db" 'SELECT count(*) FROM blocks' 2>/dev/null || echo -1)
+  total=$(sqlite3 -batch -noheader -cmd ".timeout 5000" "$dir/experiments.db" 'SELECT max(blocks_total) FROM experiments' 2>/dev/null || echo 0)
+  have=$(sqlite3 -batch -noheader -cmd ".timeout 5000" "$dir/experiments.db" 'SELECT count(*) FROM blocks' 2>/dev/null || echo -1)
   [ -n "$total" ] && [ "$total" != 0 ] && [ "$have" = "$total" ] && break
   sleep 0.2
 done
 bash "$script" stop "$name" "$dir"
 fail() { echo "FAIL: $*"; cat "$dir/out.txt"; exit 1; }
-q() { sqlite3 -batch -noheader "$dir/$1" "$2"; }
+q() { sqlite3 -batch -noheader -cmd ".timeout 5000" "$dir/$1" "$2"; }
 [ "$(q catalog.db 'SELECT count(*) FROM models')" = 2 ] || fail "models: $(q catalog.db 'SELECT count(*) FROM models')"
 [ "$(q catalog.db 'SELECT count(DISTINCT request_id) FROM models')" = 2 ] || fail "duplicate request"
 [ "$(q catalog.db 'SELECT count(DISTINCT worker_id) > 0 FROM models WHERE worker_id LIKE '\''h3-worker-%'\''')" = 1 ] || fail "workers"
