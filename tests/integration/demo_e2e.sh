@@ -8,6 +8,9 @@ idrig=$(readlink -f "$1")
 if [ "$(id -u)" -ne 0 ] || ! command -v unshare >/dev/null || ! command -v sqlite3 >/dev/null; then
   echo "skipped: needs root, unshare and sqlite3"; exit 77
 fi
+if ! unshare -n sh -c 'ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo' 2>/dev/null; then
+  echo "skipped: cannot create a network namespace here (unshare -n)"; exit 77
+fi
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 unshare -n sh -c 'ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo && exec "$0" demo --no-netns --dir "$1" --speed 100' "$idrig" "$dir/demo" > "$dir/out.txt" 2>&1 || { cat "$dir/out.txt"; exit 1; }

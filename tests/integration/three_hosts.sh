@@ -12,6 +12,9 @@ script=$here/../../deploy/netns_hosts.sh
 if [ "$(id -u)" -ne 0 ] || ! command -v ip >/dev/null || ! command -v sqlite3 >/dev/null; then
   echo "skipped: needs root, iproute2 and sqlite3"; exit 77
 fi
+if ! { ip netns add "idrig-probe$$" && ip netns del "idrig-probe$$"; } 2>/dev/null; then
+  echo "skipped: cannot create network namespaces here (ip netns)"; exit 77
+fi
 name=idrig$$
 dir=$(mktemp -d)
 cleanup() { bash "$script" stop "$name" "$dir" || true; bash "$script" down "$name" || true; rm -rf "$dir"; }
