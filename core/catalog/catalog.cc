@@ -411,6 +411,8 @@ std::vector<Metric> ModelMetrics(const nlohmann::json& report) {
   try {
     if (report.contains("fit_percent") && report["fit_percent"].is_number())
       out.push_back({"fit_percent", report["fit_percent"].get<double>(), "%"});
+    if (report.contains("record_fit_percent") && report["record_fit_percent"].is_number())
+      out.push_back({"record_fit_percent", report["record_fit_percent"].get<double>(), "%"});
     if (!report.contains("model")) return out;
     const LtiModel model = ModelFromJson(report["model"]);
     const StateSpace ss = ToStateSpace(model);

@@ -61,7 +61,8 @@ struct Metric {
   std::string unit;
 };
 
-// Metrics of a method report: fit_percent, dc_gain, order, and for each pole k (continuous
+// Metrics of a method report: fit_percent (the method's own), record_fit_percent (the worker's
+// simulation fit on the whole record, the same measure for every method), dc_gain, order, and for each pole k (continuous
 // models; discrete poles are mapped by s = ln(z)/Ts) pole_k_re, pole_k_im [rad/s],
 // wn_k [rad/s], zeta_k (sorted by wn). Never throws: a model it cannot read gives fewer metrics.
 std::vector<Metric> ModelMetrics(const nlohmann::json& report);

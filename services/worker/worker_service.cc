@@ -11,7 +11,9 @@
 #include <idrig/result_ack_t.hpp>
 #include <thread>
 
+#include "core/io/model_json.h"
 #include "core/methods/registry.h"
+#include "core/numeric/validation.h"
 #include "core/transport/channels.h"
 #include "core/transport/service_util.h"
 #include "core/transport/signing.h"
@@ -103,6 +105,15 @@ model_result_t Compute(identify_request_t request, IoRecord record, std::string 
     const nlohmann::json options = nlohmann::json::parse(r.options_json);
     MethodReport report = RunMethod(request.method, record, options);
     nlohmann::json json = report.json;
+    // The same measure for every method: simulation fit 100·(1 − NRMSE) of the model on the
+    // whole record (core/numeric/validation.h), so models of different methods compare.
+    try {
+      const Eigen::MatrixXd simulated =
+          Simulate(ModelFromJson(json.at("model")), record.u, record.sample_time);
+      json["record_fit_percent"] = FitPercent(record.y, simulated)(0);
+    } catch (const std::exception&) {
+      // a model that cannot be simulated on the record has no record fit
+    }
     std::string text = json.dump();
     if (text.size() > 50000 && json.contains("details")) {
       json["details"] = {{"trimmed", "details above 50 KB are not sent over LCM"}};

@@ -180,6 +180,11 @@ void RunFlow(Pipeline& p, double expected_loss) {
   std::map<std::string, double> metrics;
   for (const auto& x : reader.Metrics(m.model_id)) metrics[x.name] = x.value;
   ASSERT_TRUE(metrics.count("wn_3")) << "model order below 3";
+  // The worker's record fit (Simulate + FitPercent on the whole record) agrees with the
+  // method's own simulation fit: two computations of the same measure.
+  ASSERT_TRUE(metrics.count("record_fit_percent"));
+  EXPECT_NEAR(metrics["record_fit_percent"], m.fit_percent, 0.5);
+  EXPECT_GT(metrics["record_fit_percent"], 90.0);
   for (int k = 0; k < 3; ++k)
     EXPECT_NEAR(metrics["wn_" + std::to_string(k + 1)], wn_true[k], 0.05 * wn_true[k]);
   EXPECT_EQ(reader.Job(9001)->state, "done");

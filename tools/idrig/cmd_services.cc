@@ -102,10 +102,12 @@ void PrintModelTable(Catalog& catalog, const std::vector<ModelRecord>& models) {
             << "poles [rad/s]\n";
   for (const auto& m : models) {
     const auto metrics = MetricMap(catalog, m.model_id);
+    const double fit =
+        metrics.count("record_fit_percent") ? metrics.at("record_fit_percent") : m.fit_percent;
     std::cout << std::left << std::setw(6) << m.model_id << std::setw(10) << m.rig_id
               << std::setw(18) << m.experiment_id << std::setw(18) << m.method << std::setw(9)
-              << Number(m.fit_percent, 4) << std::setw(21) << TimeText(m.created_utime)
-              << PolesText(metrics) << "\n";
+              << Number(fit, 4) << std::setw(21) << TimeText(m.created_utime) << PolesText(metrics)
+              << "\n";
   }
 }
 
@@ -136,7 +138,10 @@ void PrintModel(Catalog& catalog, const ModelRecord& m, bool json) {
   std::cout << "model " << m.model_id << " (request " << m.request_id << ")\n"
             << "  W = " << ModelText(m.model_json) << "\n"
             << "  poles: " << PolesText(metrics) << " rad/s\n"
-            << "  fit " << Number(m.fit_percent) << " %, DC gain "
+            << "  fit on the whole record "
+            << (metrics.count("record_fit_percent") ? Number(metrics.at("record_fit_percent"))
+                                                    : "-")
+            << " % (the method's own: " << Number(m.fit_percent) << " %), DC gain "
             << (metrics.count("dc_gain") ? Number(metrics.at("dc_gain")) : "-") << ", status "
             << m.status << "\n"
             << "  lineage: rig " << m.rig_id << ", experiment " << m.experiment_id << " ("
