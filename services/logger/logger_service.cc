@@ -1,11 +1,13 @@
 #include "services/logger/logger_service.h"
 
 #include <chrono>
+#include <cstdio>
 #include <idrig/actuator_command_t.hpp>
 #include <idrig/experiment_status_t.hpp>
 #include <idrig/measurement_block_t.hpp>
 #include <idrig/replay_done_t.hpp>
 #include <idrig/replay_request_t.hpp>
+#include <lcm/lcm-cpp.hpp>
 
 #include "core/transport/channels.h"
 #include "core/transport/service_util.h"
@@ -50,6 +52,7 @@ LoggerConfig LoggerConfig::FromJson(const nlohmann::json& c) {
   config.lcm_queue_capacity = ConfigValue<int>(c, "lcm_queue_capacity", config.lcm_queue_capacity);
   config.recover_period_s = ConfigValue<double>(c, "recover_period_s", config.recover_period_s);
   config.recover_window_s = ConfigValue<double>(c, "recover_window_s", config.recover_window_s);
+  config.lcmlog_path = ConfigValue<std::string>(c, "lcmlog_path", config.lcmlog_path);
   return config;
 }
 
@@ -62,7 +65,9 @@ LoggerService::LoggerService(Transport& transport, LoggerConfig config)
   auto subscribe = [this](ChannelKind channel, Kind kind) {
     transport_.Subscribe(
         AnyRigChannel(channel),
-        [this, kind](const std::string&, const uint8_t* d, size_t n) { Enqueue(kind, d, n); },
+        [this, kind](const std::string& channel, const uint8_t* d, size_t n) {
+          Enqueue(kind, channel, d, n);
+        },
         config_.lcm_queue_capacity);
   };
   subscribe(ChannelKind::kMeasurement, Kind::kMeasurement);
@@ -81,7 +86,8 @@ LoggerService::~LoggerService() {
   writer_.join();
 }
 
-void LoggerService::Enqueue(Kind kind, const uint8_t* data, size_t size) {
+void LoggerService::Enqueue(Kind kind, const std::string& channel, const uint8_t* data,
+                            size_t size) {
   if (size > 65536) {
     ++transport_.counters().oversized;
     return;
@@ -92,7 +98,7 @@ void LoggerService::Enqueue(Kind kind, const uint8_t* data, size_t size) {
       ++transport_.counters().dropped;
       return;
     }
-    queue_.push_back({kind, NowMicros(), std::vector<uint8_t>(data, data + size)});
+    queue_.push_back({kind, NowMicros(), channel, std::vector<uint8_t>(data, data + size)});
     if (queue_.size() > peak_queue_) peak_queue_ = queue_.size();
     if (queue_.size() > 1) return;  // the writer is awake already (or will look again)
   }
@@ -101,6 +107,14 @@ void LoggerService::Enqueue(Kind kind, const uint8_t* data, size_t size) {
 
 void LoggerService::WriterLoop() {
   ExperimentStore store(config_.db_path);
+  std::unique_ptr<lcm::LogFile> lcmlog;
+  if (!config_.lcmlog_path.empty()) {
+    lcmlog = std::make_unique<lcm::LogFile>(config_.lcmlog_path, "w");
+    if (!lcmlog->good()) {
+      ++transport_.counters().handler_errors;
+      lcmlog.reset();
+    }
+  }
   auto last_summary = std::chrono::steady_clock::now() - std::chrono::seconds(10);
   for (;;) {
     std::deque<Item> batch;
@@ -117,11 +131,22 @@ void LoggerService::WriterLoop() {
         store.Begin();
         std::vector<const Item*> replays;
         for (const Item& item : batch) {
-          if (item.kind == Kind::kReplayRequest)
+          if (item.kind == Kind::kReplayRequest) {
             replays.push_back(&item);
-          else
-            Store(store, item);
+            continue;
+          }
+          Store(store, item);
+          if (lcmlog) {
+            lcm::LogEvent event;
+            event.eventnum = 0;  // numbered by the log file
+            event.timestamp = item.recv_utime;
+            event.channel = item.channel;
+            event.datalen = static_cast<int32_t>(item.bytes.size());
+            event.data = const_cast<uint8_t*>(item.bytes.data());
+            lcmlog->writeEvent(&event);
+          }
         }
+        if (lcmlog) fflush(lcmlog->getFilePtr());
         store.Commit();
         // Replays after the commit: they see everything received before them.
         for (const Item* item : replays) Replay(store, *item);

@@ -36,6 +36,7 @@ struct LoggerConfig {
   int replay_pause_every = 200;     // blocks; pause 2 ms to let receivers drain
   double recover_period_s = 0.5;    // ask the rig again for lost blocks this often
   double recover_window_s = 60.0;   // ... for experiments ended less than this ago
+  std::string lcmlog_path;          // also write every recorded message to this .lcmlog ("" = off)
   static LoggerConfig FromJson(const nlohmann::json& config);
 };
 
@@ -54,9 +55,10 @@ class LoggerService {
   struct Item {
     Kind kind;
     int64_t recv_utime;
+    std::string channel;
     std::vector<uint8_t> bytes;
   };
-  void Enqueue(Kind kind, const uint8_t* data, size_t size);
+  void Enqueue(Kind kind, const std::string& channel, const uint8_t* data, size_t size);
   void WriterLoop();
   void Store(ExperimentStore& store, const Item& item);
   void Replay(ExperimentStore& store, const Item& item);

@@ -9,6 +9,7 @@
 #include <idrig/measurement_block_t.hpp>
 #include <idrig/replay_done_t.hpp>
 #include <idrig/replay_request_t.hpp>
+#include <lcm/lcm-cpp.hpp>
 
 #include "core/transport/channels.h"
 #include "services/logger/logger_service.h"
@@ -99,6 +100,29 @@ TEST(Logger, FindsGapsAndReplaysWhatIsMissing) {
   EXPECT_EQ(done.blocks_total, 9);
   EXPECT_EQ(done.missing_seqs, (std::vector<int64_t>{3, 6, 8}));
   EXPECT_EQ(logger.stored_blocks(), 6);
+}
+
+TEST(Logger, AlsoWritesAnLcmlogThatLcmReads) {
+  auto t = MakeLcmTransport("memq://");
+  LoggerConfig config;
+  config.db_path = TempPath("logger_lcmlog.db");
+  config.lcmlog_path = TempPath("logger.lcmlog");
+  {
+    LoggerService logger(*t, config);
+    for (int64_t seq : {0, 1, 2}) t->PublishMessage("IDRIG/rig-l/MEAS", Block(seq));
+    for (int i = 0; i < 5; ++i) logger.Poll(5);
+    logger.Flush();
+  }
+  lcm::LogFile log(config.lcmlog_path, "r");
+  ASSERT_TRUE(log.good());
+  std::vector<int64_t> seqs;
+  while (const lcm::LogEvent* e = log.readNextEvent()) {
+    EXPECT_EQ(e->channel, "IDRIG/rig-l/MEAS");
+    measurement_block_t b;
+    ASSERT_GT(b.decode(e->data, 0, e->datalen), 0);
+    seqs.push_back(b.seq);
+  }
+  EXPECT_EQ(seqs, (std::vector<int64_t>{0, 1, 2}));
 }
 
 TEST(Logger, AFullQueueDropsAndCounts) {
