@@ -7,4 +7,8 @@ void RegisterIdentifyCommand(CLI::App& app);
 void RegisterExampleCommand(CLI::App& app);
 void RegisterSimulateCommand(CLI::App& app);
 void RegisterExciteCommand(CLI::App& app);  // cmd_excite.cc
+// cmd_services.cc: demo, experiment, models, status, spy. SetCommandLine keeps argv so that
+// `idrig demo` can re-run itself inside a network namespace.
+void RegisterServiceCommands(CLI::App& app);
+void SetCommandLine(int argc, char** argv);
 }  // namespace idrig

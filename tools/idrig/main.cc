@@ -14,6 +14,8 @@ int main(int argc, char** argv) {
   idrig::RegisterExampleCommand(app);
   idrig::RegisterSimulateCommand(app);
   idrig::RegisterExciteCommand(app);
+  idrig::RegisterServiceCommands(app);
+  idrig::SetCommandLine(argc, argv);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,57 @@
+#pragma once
+// The logger's experiment store (a separate SQLite file from the catalogue, same rules: WAL,
+// migrations, prepared statements only). Raw LCM encodings are stored as BLOBs per block, so a
+// replay re-publishes exactly what the rig sent; the columns beside them index the blocks.
+#include <cstdint>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/catalog/sqlite.h"
+
+namespace idrig {
+
+struct StoredBlock {
+  int64_t seq = 0, first_sample = 0, n_samples = 0, utime = 0, recv_utime = 0;
+  std::vector<uint8_t> data;  // LCM encoding of the measurement_block_t / actuator_command_t
+};
+
+struct StoredExperiment {
+  std::string rig_id;
+  int64_t experiment_id = 0;
+  std::string signal_spec;
+  double sample_rate_hz = 0.0;
+  bool ended = false;
+  int64_t blocks_total = 0, samples_total = 0;
+  int64_t blocks_stored = 0, commands_stored = 0;
+  int64_t updated_utime = 0;
+};
+
+class ExperimentStore {
+ public:
+  explicit ExperimentStore(const std::string& path);
+  static const std::vector<std::string>& Migrations();
+
+  void Begin();  // batch writes in one transaction (as rosbag2 does)
+  void Commit();
+  // INSERT OR IGNORE: a duplicate (rig, experiment, seq) is kept once. Returns true if new.
+  bool AddBlock(const std::string& rig_id, int64_t experiment_id, const StoredBlock& block);
+  bool AddCommand(const std::string& rig_id, int64_t experiment_id, const StoredBlock& command);
+  // Records what the rig reported (end, totals) or the excitation (spec, fs).
+  void UpdateExperiment(const StoredExperiment& experiment);
+
+  std::vector<StoredExperiment> Experiments();
+  bool FindExperiment(const std::string& rig_id, int64_t experiment_id, StoredExperiment* out);
+  std::vector<StoredBlock> Blocks(const std::string& rig_id, int64_t experiment_id,
+                                  const std::set<int64_t>& skip = {});
+  std::set<int64_t> BlockSeqs(const std::string& rig_id, int64_t experiment_id);
+  // Block seqs in [0, blocks_total) not stored (blocks_total from the rig's final status, or
+  // max seq + 1 while the experiment runs).
+  std::vector<int64_t> MissingBlocks(const std::string& rig_id, int64_t experiment_id);
+
+ private:
+  SqliteDatabase db_;
+  SqliteStatement insert_block_, insert_command_;
+};
+
+}  // namespace idrig

@@ -1,0 +1,34 @@
+#pragma once
+// Small helpers shared by the service mains: stop on SIGINT/SIGTERM, JSON config files.
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace idrig {
+
+class Transport;
+// The transport of a service process: LCM on `url`, wrapped to drop the fraction
+// `receive_loss` of received messages when it is > 0 (config key "receive_loss", or --loss:
+// a lossy network for tests where tc netem is not available). Seeded from the pid.
+std::unique_ptr<Transport> MakeServiceTransport(const std::string& url, double receive_loss);
+
+// Installs SIGINT/SIGTERM handlers that set a flag read by StopRequested().
+void InstallStopSignals();
+bool StopRequested();
+
+// Reads a JSON config file ("" gives an empty object). Throws std::invalid_argument naming
+// the file when it cannot be read or parsed.
+nlohmann::json ReadJsonConfig(const std::string& path);
+
+// A config value with a default; throws std::invalid_argument naming the key on a wrong type.
+template <class T>
+T ConfigValue(const nlohmann::json& config, const char* key, const T& fallback) {
+  if (!config.is_object() || !config.contains(key) || config[key].is_null()) return fallback;
+  try {
+    return config[key].get<T>();
+  } catch (const std::exception&) {
+    throw std::invalid_argument(std::string("config key '") + key + "' has the wrong type");
+  }
+}
+
+}  // namespace idrig

@@ -1,0 +1,210 @@
+#include "services/excite/excite_service.h"
+
+#include <cmath>
+#include <idrig/actuator_command_t.hpp>
+
+#include "core/transport/channels.h"
+#include "core/transport/service_util.h"
+
+namespace idrig {
+
+ExciteConfig ExciteConfig::FromJson(const nlohmann::json& c) {
+  ExciteConfig config;
+  config.rig_id = ConfigValue<std::string>(c, "rig_id", config.rig_id);
+  const std::string key_file = ConfigValue<std::string>(c, "key_file", "");
+  if (!key_file.empty()) config.key = ReadKeyFile(key_file);
+  config.key_id = ConfigValue<int32_t>(c, "key_id", config.key_id);
+  config.block_samples = ConfigValue<int>(c, "block_samples", config.block_samples);
+  config.max_abs = ConfigValue<double>(c, "max_abs", config.max_abs);
+  config.max_rate = ConfigValue<double>(c, "max_rate", config.max_rate);
+  config.max_speed = ConfigValue<double>(c, "max_speed", config.max_speed);
+  config.status_period_s = ConfigValue<double>(c, "status_period_s", config.status_period_s);
+  return config;
+}
+
+ExciteService::ExciteService(Transport& transport, ExciteConfig config)
+    : transport_(transport),
+      config_(std::move(config)),
+      reporter_(transport, "excite", "excite-" + config_.rig_id),
+      command_channel_(Channel(config_.rig_id, ChannelKind::kCommand)),
+      status_channel_(Channel(config_.rig_id, ChannelKind::kExperimentStatus)),
+      // Starts at the start time in µs, so seq keeps increasing across restarts (the rig
+      // refuses a seq that is not above the last one it accepted).
+      command_seq_(NowMicros()) {
+  if (config_.key.size() < 16)
+    throw std::invalid_argument("idrig-excite needs an HMAC key (key_file) of >= 16 bytes");
+  if (config_.block_samples < 1 || config_.block_samples > 4000)
+    throw std::invalid_argument("block_samples must be in 1..4000 (one command < 60 KB)");
+  transport_.Subscribe(Channel(config_.rig_id, ChannelKind::kExperimentRequest),
+                       [this](const std::string&, const uint8_t* d, size_t n) { OnRequest(d, n); });
+}
+
+void ExciteService::OnRequest(const uint8_t* data, size_t size) {
+  experiment_request_t request;
+  if (!Decode(data, size, &request, &transport_.counters(), 65536)) return;
+  if (request.rig_id != config_.rig_id) return;
+  if (!seen_requests_.insert(request.request_id).second) return;  // idempotent
+  if (request.action == experiment_request_t::ACTION_START)
+    Start(request);
+  else if (request.action == experiment_request_t::ACTION_STOP)
+    Stop(request);
+}
+
+void ExciteService::Start(const experiment_request_t& request) {
+  experiment_status_t status{};
+  status.source = "excite";
+  status.rig_id = config_.rig_id;
+  status.experiment_id = request.experiment_id;
+  status.request_id = request.request_id;
+  status.signal_spec = request.signal_spec;
+  status.sample_rate_hz = request.sample_rate_hz;
+  status.state = experiment_status_t::STATE_FAILED;
+  auto fail = [&](const std::string& message) {
+    status.message = message;
+    status.end_utime = NowMicros();
+    PublishStatus(status);
+    recent_.push_back(status);
+    if (recent_.size() > 8) recent_.pop_front();
+  };
+  if (active_)
+    return fail("rig busy with experiment " + std::to_string(active_->status.experiment_id));
+  try {
+    if (!(request.sample_rate_hz > 0 && std::isfinite(request.sample_rate_hz)))
+      throw std::invalid_argument("sample_rate_hz must be > 0");
+    if (!(request.duration_s > 0 && std::isfinite(request.duration_s)))
+      throw std::invalid_argument("duration_s must be > 0");
+    const double speed = request.speed > 0 ? request.speed : 1.0;
+    if (speed > config_.max_speed)
+      throw std::invalid_argument("speed " + std::to_string(speed) + " above this rig's maximum " +
+                                  std::to_string(config_.max_speed));
+    ExcitationLimits limits;
+    limits.max_abs = config_.max_abs;
+    if (request.max_abs > 0 && (limits.max_abs <= 0 || request.max_abs < limits.max_abs))
+      limits.max_abs = request.max_abs;
+    limits.max_rate = config_.max_rate;
+    if (request.max_rate > 0 && (limits.max_rate <= 0 || request.max_rate < limits.max_rate))
+      limits.max_rate = request.max_rate;
+    limits.horizon_s = request.duration_s;
+    const ExcitationSpec spec = ParseExcitationSpec(request.signal_spec);
+    const AcceptedExcitation accepted = AcceptExcitation(spec, request.sample_rate_hz, limits);
+    Active a;
+    a.generator = std::make_unique<ExcitationGenerator>(accepted.spec, request.sample_rate_hz);
+    a.speed = speed;
+    a.start_wall_us = NowMicros();
+    status.state = experiment_status_t::STATE_RUNNING;
+    status.signal_spec = FormatExcitationSpec(accepted.spec);
+    status.samples_total = std::llround(request.duration_s * request.sample_rate_hz);
+    status.start_utime = a.start_wall_us;
+    status.message =
+        "limits |u| <= " + std::to_string(limits.max_abs) +
+        (limits.max_rate > 0 ? ", |du/dt| <= " + std::to_string(limits.max_rate) : "") +
+        "; peak |u| " + std::to_string(accepted.peak_abs);
+    a.status = status;
+    active_ = std::move(a);
+    PublishStatus(active_->status);
+  } catch (const std::exception& e) {
+    fail(std::string("refused: ") + e.what());
+  }
+}
+
+void ExciteService::Stop(const experiment_request_t& request) {
+  if (!active_ || active_->status.experiment_id != request.experiment_id) return;
+  SendCommand(active_->status.experiment_id, active_->next_sample, active_->status.sample_rate_hz,
+              actuator_command_t::FLAG_STOP, {});
+  Finish(experiment_status_t::STATE_STOPPED,
+         "stopped by request " + std::to_string(request.request_id));
+}
+
+void ExciteService::SendCommand(int64_t experiment_id, int64_t first_sample, double fs,
+                                int32_t flags, const std::vector<double>& u) {
+  actuator_command_t command{};
+  command.utime = NowMicros();
+  command.seq = ++command_seq_;
+  command.key_id = config_.key_id;
+  command.rig_id = config_.rig_id;
+  command.experiment_id = experiment_id;
+  command.first_sample = first_sample;
+  command.sample_rate_hz = fs;
+  command.flags = flags;
+  command.n_samples = static_cast<int32_t>(u.size());
+  command.u = u;
+  SignCommand(&command, config_.key);
+  transport_.PublishMessage(command_channel_, command);
+}
+
+void ExciteService::Finish(int32_t state, const std::string& message) {
+  active_->status.state = state;
+  active_->status.end_utime = NowMicros();
+  if (!message.empty()) active_->status.message = message;
+  PublishStatus(active_->status);
+  recent_.push_back(active_->status);
+  if (recent_.size() > 8) recent_.pop_front();
+  active_.reset();
+}
+
+void ExciteService::Tick() {
+  if (active_) {
+    Active& a = *active_;
+    const double fs = a.status.sample_rate_hz;
+    const int64_t total = a.status.samples_total;
+    // Samples due by now: experiment time = wall time · speed.
+    const double elapsed_s = 1e-6 * static_cast<double>(NowMicros() - a.start_wall_us) * a.speed;
+    const int64_t due = std::min<int64_t>(total, static_cast<int64_t>(elapsed_s * fs) + 1);
+    while (a.next_sample < total &&
+           (due - a.next_sample >= config_.block_samples || due == total)) {
+      const int64_t n = std::min<int64_t>(config_.block_samples, total - a.next_sample);
+      std::vector<double> u(static_cast<size_t>(n));
+      for (auto& value : u) value = a.generator->Next();
+      const bool last = a.next_sample + n == total;
+      SendCommand(a.status.experiment_id, a.next_sample, fs,
+                  last ? actuator_command_t::FLAG_FINAL : 0, u);
+      a.next_sample += n;
+      a.status.samples_done = a.next_sample;
+    }
+    if (a.next_sample >= total) {
+      // Two more (empty) final commands, in case the last block is lost on the way.
+      for (int i = 0; i < 2; ++i)
+        SendCommand(a.status.experiment_id, total, fs, actuator_command_t::FLAG_FINAL, {});
+      Finish(experiment_status_t::STATE_DONE, "");
+    }
+  }
+  const int64_t now = NowMicros();
+  if (now - last_status_us_ >= static_cast<int64_t>(config_.status_period_s * 1e6)) {
+    last_status_us_ = now;
+    if (active_) PublishStatus(active_->status);
+    if (!recent_.empty()) PublishStatus(recent_.back());
+  }
+  if (reporter_.Due()) reporter_.Maybe(active_ ? "busy" : "running", Details().dump(), true);
+}
+
+void ExciteService::PublishStatus(const experiment_status_t& status) {
+  experiment_status_t s = status;
+  s.utime = NowMicros();
+  s.seq = status_seq_++;
+  transport_.PublishMessage(status_channel_, s);
+}
+
+nlohmann::json ExciteService::Details() const {
+  nlohmann::json d;
+  d["rig_id"] = config_.rig_id;
+  d["command_seq"] = command_seq_;
+  if (active_) {
+    d["active"] = {{"experiment_id", active_->status.experiment_id},
+                   {"samples_done", active_->status.samples_done},
+                   {"samples_total", active_->status.samples_total},
+                   {"signal_spec", active_->status.signal_spec}};
+  }
+  nlohmann::json recent = nlohmann::json::array();
+  for (const auto& s : recent_)
+    recent.push_back(
+        {{"experiment_id", s.experiment_id}, {"state", s.state}, {"message", s.message}});
+  d["recent"] = recent;
+  return d;
+}
+
+void ExciteService::Poll(int timeout_ms) {
+  transport_.Handle(timeout_ms);
+  Tick();
+}
+
+}  // namespace idrig

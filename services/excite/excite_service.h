@@ -1,0 +1,74 @@
+#pragma once
+// idrig-excite: takes experiment requests, generates the excitation in real time with the
+// excitation library (core/numeric/excitation.h), publishes signed actuator commands in blocks
+// of block_samples samples, and publishes experiment status (IDRIG/<rig>/EXP_STATUS).
+// Limits are checked before anything moves (AcceptExcitation); the rig checks them again.
+#include <deque>
+#include <idrig/experiment_request_t.hpp>
+#include <idrig/experiment_status_t.hpp>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <set>
+#include <string>
+
+#include "core/numeric/excitation.h"
+#include "core/transport/signing.h"
+#include "core/transport/status.h"
+#include "core/transport/transport.h"
+
+namespace idrig {
+
+struct ExciteConfig {
+  std::string rig_id = "sim1";
+  HmacKey key;  // shared with the rig
+  int32_t key_id = 1;
+  int block_samples = 10;     // samples per actuator_command_t
+  double max_abs = 10.0;      // |u| limit [actuator units] (a request may only lower it)
+  double max_rate = 0.0;      // |du/dt| limit [units/s]; 0: unchecked
+  double max_speed = 1000.0;  // largest experiment-time / wall-time ratio accepted
+  double status_period_s = 0.5;
+  // Reads keys "rig_id", "key_file", "key_id", "block_samples", "max_abs", "max_rate",
+  // "max_speed", "status_period_s".
+  static ExciteConfig FromJson(const nlohmann::json& config);
+};
+
+class ExciteService {
+ public:
+  ExciteService(Transport& transport, ExciteConfig config);
+  // Dispatches messages for up to timeout_ms, then generates what is due and publishes status.
+  void Poll(int timeout_ms);
+  void Tick();
+  bool busy() const { return active_.has_value(); }
+  nlohmann::json Details() const;
+
+ private:
+  struct Active {
+    experiment_status_t status{};
+    std::unique_ptr<ExcitationGenerator> generator;
+    double speed = 1.0;
+    int64_t start_wall_us = 0;
+    int64_t next_sample = 0;
+  };
+  void OnRequest(const uint8_t* data, size_t size);
+  void Start(const experiment_request_t& request);
+  void Stop(const experiment_request_t& request);
+  void SendCommand(int64_t experiment_id, int64_t first_sample, double fs, int32_t flags,
+                   const std::vector<double>& u);
+  void Finish(int32_t state, const std::string& message);
+  void PublishStatus(const experiment_status_t& status);
+
+  Transport& transport_;
+  ExciteConfig config_;
+  StatusReporter reporter_;
+  std::string command_channel_, status_channel_;
+  int64_t command_seq_;
+  int64_t status_seq_ = 0;
+  std::optional<Active> active_;
+  std::deque<experiment_status_t> recent_;  // finished experiments, newest last
+  std::set<int64_t> seen_requests_;
+  int64_t last_status_us_ = 0;
+};
+
+}  // namespace idrig

@@ -1,0 +1,340 @@
+#include "services/logger/logger_service.h"
+
+#include <chrono>
+#include <cstdio>
+#include <idrig/actuator_command_t.hpp>
+#include <idrig/experiment_status_t.hpp>
+#include <idrig/measurement_block_t.hpp>
+#include <idrig/replay_done_t.hpp>
+#include <idrig/replay_request_t.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include "core/transport/channels.h"
+#include "core/transport/service_util.h"
+
+namespace idrig {
+
+bool PeekMeasurementHeader(const uint8_t* data, size_t size, MeasurementHeader* h) {
+  // LCM encoding, big-endian: fingerprint (8), utime (8), rig_id (int32 length incl. NUL, bytes),
+  // experiment_id (8), seq (8), first_sample (8), sample_time_s (8), n_samples (4), ...
+  size_t pos = 0;
+  auto read = [&](int bytes, uint64_t* out) {
+    if (pos + bytes > size) return false;
+    uint64_t v = 0;
+    for (int i = 0; i < bytes; ++i) v = (v << 8) | data[pos + i];
+    pos += bytes;
+    *out = v;
+    return true;
+  };
+  uint64_t v = 0;
+  if (!read(8, &v) || v != static_cast<uint64_t>(measurement_block_t::getHash())) return false;
+  if (!read(8, &v)) return false;
+  h->utime = static_cast<int64_t>(v);
+  if (!read(4, &v) || v < 1 || v > 64 || pos + v > size) return false;
+  h->rig_id.assign(reinterpret_cast<const char*>(data + pos), v - 1);
+  pos += v;
+  if (!read(8, &v)) return false;
+  h->experiment_id = static_cast<int64_t>(v);
+  if (!read(8, &v)) return false;
+  h->seq = static_cast<int64_t>(v);
+  if (!read(8, &v)) return false;
+  h->first_sample = static_cast<int64_t>(v);
+  if (!read(8, &v)) return false;  // sample_time_s
+  if (!read(4, &v)) return false;
+  h->n_samples = static_cast<int32_t>(v);
+  return true;
+}
+
+LoggerConfig LoggerConfig::FromJson(const nlohmann::json& c) {
+  LoggerConfig config;
+  config.db_path = ConfigValue<std::string>(c, "db_path", config.db_path);
+  config.queue_capacity = ConfigValue<size_t>(c, "queue_capacity", config.queue_capacity);
+  config.lcm_queue_capacity = ConfigValue<int>(c, "lcm_queue_capacity", config.lcm_queue_capacity);
+  config.recover_period_s = ConfigValue<double>(c, "recover_period_s", config.recover_period_s);
+  config.recover_window_s = ConfigValue<double>(c, "recover_window_s", config.recover_window_s);
+  config.lcmlog_path = ConfigValue<std::string>(c, "lcmlog_path", config.lcmlog_path);
+  return config;
+}
+
+LoggerService::LoggerService(Transport& transport, LoggerConfig config)
+    : transport_(transport),
+      config_(std::move(config)),
+      reporter_(transport, "logger", "logger-" + HostName()) {
+  // Open once here so that a bad path fails at start, not in the writer thread.
+  { ExperimentStore check(config_.db_path); }
+  auto subscribe = [this](ChannelKind channel, Kind kind) {
+    transport_.Subscribe(
+        AnyRigChannel(channel),
+        [this, kind](const std::string& channel, const uint8_t* d, size_t n) {
+          Enqueue(kind, channel, d, n);
+        },
+        config_.lcm_queue_capacity);
+  };
+  subscribe(ChannelKind::kMeasurement, Kind::kMeasurement);
+  subscribe(ChannelKind::kCommand, Kind::kCommand);
+  subscribe(ChannelKind::kExperimentStatus, Kind::kStatus);
+  subscribe(ChannelKind::kReplayRequest, Kind::kReplayRequest);
+  writer_ = std::thread([this] { WriterLoop(); });
+}
+
+LoggerService::~LoggerService() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  writer_.join();
+}
+
+void LoggerService::Enqueue(Kind kind, const std::string& channel, const uint8_t* data,
+                            size_t size) {
+  if (size > 65536) {
+    ++transport_.counters().oversized;
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (queue_.size() >= config_.queue_capacity) {
+      ++transport_.counters().dropped;
+      return;
+    }
+    queue_.push_back({kind, NowMicros(), channel, std::vector<uint8_t>(data, data + size)});
+    if (queue_.size() > peak_queue_) peak_queue_ = queue_.size();
+    if (queue_.size() > 1) return;  // the writer is awake already (or will look again)
+  }
+  wake_.notify_one();
+}
+
+void LoggerService::WriterLoop() {
+  ExperimentStore store(config_.db_path);
+  std::unique_ptr<lcm::LogFile> lcmlog;
+  if (!config_.lcmlog_path.empty()) {
+    lcmlog = std::make_unique<lcm::LogFile>(config_.lcmlog_path, "w");
+    if (!lcmlog->good()) {
+      ++transport_.counters().handler_errors;
+      lcmlog.reset();
+    }
+  }
+  auto last_summary = std::chrono::steady_clock::now() - std::chrono::seconds(10);
+  for (;;) {
+    std::deque<Item> batch;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait_for(lock, std::chrono::milliseconds(100),
+                     [this] { return stop_ || !queue_.empty(); });
+      if (stop_ && queue_.empty()) break;
+      batch.swap(queue_);
+      in_flight_ = batch.size();
+    }
+    if (!batch.empty()) {
+      try {
+        store.Begin();
+        std::vector<const Item*> replays;
+        for (const Item& item : batch) {
+          if (item.kind == Kind::kReplayRequest) {
+            replays.push_back(&item);
+            continue;
+          }
+          Store(store, item);
+          if (lcmlog) {
+            lcm::LogEvent event;
+            event.eventnum = 0;  // numbered by the log file
+            event.timestamp = item.recv_utime;
+            event.channel = item.channel;
+            event.datalen = static_cast<int32_t>(item.bytes.size());
+            event.data = const_cast<uint8_t*>(item.bytes.data());
+            lcmlog->writeEvent(&event);
+          }
+        }
+        if (lcmlog) fflush(lcmlog->getFilePtr());
+        store.Commit();
+        // Replays after the commit: they see everything received before them.
+        for (const Item* item : replays) Replay(store, *item);
+      } catch (const std::exception&) {
+        ++transport_.counters().handler_errors;
+        try {
+          store.Commit();
+        } catch (...) {
+        }
+      }
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      in_flight_ = 0;
+    }
+    drained_.notify_all();
+    const auto now = std::chrono::steady_clock::now();
+    if (now - last_summary >
+        std::chrono::milliseconds(static_cast<int>(config_.recover_period_s * 1000))) {
+      last_summary = now;
+      try {
+        RecoverLosses(store);
+        UpdateSummary(store);
+      } catch (...) {
+        ++transport_.counters().handler_errors;
+      }
+    }
+  }
+}
+
+void LoggerService::Store(ExperimentStore& store, const Item& item) {
+  const uint8_t* data = item.bytes.data();
+  const size_t size = item.bytes.size();
+  if (item.kind == Kind::kMeasurement) {
+    // Only the header is read (the samples stay encoded in the BLOB): fast enough for
+    // tens of thousands of blocks per second.
+    MeasurementHeader h;
+    if (!PeekMeasurementHeader(data, size, &h)) {
+      measurement_block_t probe;  // classify the failure for the counters
+      Decode(data, size, &probe, &transport_.counters());
+      return;
+    }
+    StoredBlock b;
+    b.seq = h.seq;
+    b.first_sample = h.first_sample;
+    b.n_samples = h.n_samples;
+    b.utime = h.utime;
+    b.recv_utime = item.recv_utime;
+    b.data = item.bytes;
+    if (store.AddBlock(h.rig_id, h.experiment_id, b))
+      ++stored_blocks_;
+    else
+      ++duplicates_;
+  } else if (item.kind == Kind::kCommand) {
+    actuator_command_t command;
+    if (!Decode(data, size, &command, &transport_.counters())) return;
+    StoredBlock b;
+    b.seq = command.seq;
+    b.first_sample = command.first_sample;
+    b.n_samples = command.n_samples;
+    b.utime = command.utime;
+    b.recv_utime = item.recv_utime;
+    b.data = item.bytes;
+    if (store.AddCommand(command.rig_id, command.experiment_id, b)) ++stored_commands_;
+  } else if (item.kind == Kind::kStatus) {
+    experiment_status_t status;
+    if (!Decode(data, size, &status, &transport_.counters())) return;
+    StoredExperiment e;
+    e.rig_id = status.rig_id;
+    e.experiment_id = status.experiment_id;
+    e.updated_utime = item.recv_utime;
+    if (status.source == "excite") {
+      e.signal_spec = status.signal_spec;
+      e.sample_rate_hz = status.sample_rate_hz;
+    } else if (status.source == "rig") {
+      e.sample_rate_hz = status.sample_rate_hz;
+      e.ended = status.state != experiment_status_t::STATE_RUNNING &&
+                status.state != experiment_status_t::STATE_PENDING;
+      if (e.ended) {
+        e.blocks_total = status.blocks_total;
+        e.samples_total = status.samples_total;
+      }
+    }
+    store.UpdateExperiment(e);
+  }
+}
+
+void LoggerService::Replay(ExperimentStore& store, const Item& item) {
+  replay_request_t request;
+  if (!Decode(item.bytes.data(), item.bytes.size(), &request, &transport_.counters())) return;
+  ++replays_;
+  const std::set<int64_t> have(request.have_seqs.begin(), request.have_seqs.end());
+  const std::string replay_channel = Channel(request.rig_id, ChannelKind::kReplay);
+  int sent = 0;
+  for (const StoredBlock& b : store.Blocks(request.rig_id, request.experiment_id, have)) {
+    transport_.Publish(replay_channel, b.data.data(), b.data.size());
+    if (++sent % config_.replay_pause_every == 0)
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  replay_done_t done{};
+  done.utime = NowMicros();
+  done.replay_id = request.replay_id;
+  done.requester = request.requester;
+  done.rig_id = request.rig_id;
+  done.experiment_id = request.experiment_id;
+  StoredExperiment e;
+  if (store.FindExperiment(request.rig_id, request.experiment_id, &e)) {
+    done.ended = e.ended;
+    done.blocks_total = e.blocks_total;
+    done.samples_total = e.samples_total;
+  }
+  done.missing_seqs = store.MissingBlocks(request.rig_id, request.experiment_id);
+  if (done.missing_seqs.size() > 4000) done.missing_seqs.resize(4000);
+  done.n_missing = static_cast<int32_t>(done.missing_seqs.size());
+  done.complete = done.ended && done.n_missing == 0;
+  done.n_sent = sent;
+  transport_.PublishMessage(Channel(request.rig_id, ChannelKind::kReplayDone), done);
+}
+
+// Blocks lost between the rig and us: once the rig reports the experiment ended (and so its
+// blocks_total), ask the rig to re-send what is missing (it keeps recent experiments).
+void LoggerService::RecoverLosses(ExperimentStore& store) {
+  const int64_t now = NowMicros();
+  for (const StoredExperiment& e : store.Experiments()) {
+    if (!e.ended || e.blocks_stored >= e.blocks_total) continue;
+    if (now - e.updated_utime > static_cast<int64_t>(config_.recover_window_s * 1e6)) continue;
+    replay_request_t request{};
+    request.utime = now;
+    request.replay_id = ++recovery_requests_;
+    request.requester = "logger";
+    request.rig_id = e.rig_id;
+    request.experiment_id = e.experiment_id;
+    for (int64_t seq : store.BlockSeqs(e.rig_id, e.experiment_id)) request.have_seqs.push_back(seq);
+    request.n_have = static_cast<int32_t>(request.have_seqs.size());
+    transport_.PublishMessage(Channel(e.rig_id, ChannelKind::kRigReplayRequest), request);
+  }
+}
+
+void LoggerService::UpdateSummary(ExperimentStore& store) {
+  nlohmann::json list = nlohmann::json::array();
+  auto experiments = store.Experiments();
+  const size_t first = experiments.size() > 10 ? experiments.size() - 10 : 0;
+  for (size_t i = first; i < experiments.size(); ++i) {
+    const StoredExperiment& e = experiments[i];
+    const auto missing = store.MissingBlocks(e.rig_id, e.experiment_id);
+    std::vector<int64_t> shown(missing.begin(),
+                               missing.begin() + std::min<size_t>(missing.size(), 50));
+    list.push_back({{"rig_id", e.rig_id},
+                    {"experiment_id", e.experiment_id},
+                    {"blocks", e.blocks_stored},
+                    {"commands", e.commands_stored},
+                    {"ended", e.ended},
+                    {"blocks_total", e.blocks_total},
+                    {"missing_count", missing.size()},
+                    {"missing", shown},
+                    {"complete", e.ended && missing.empty()}});
+  }
+  std::lock_guard<std::mutex> lock(summary_mutex_);
+  summary_ = list;
+}
+
+void LoggerService::Flush() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  drained_.wait(lock, [this] { return queue_.empty() && in_flight_ == 0; });
+}
+
+nlohmann::json LoggerService::Details() {
+  nlohmann::json d;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    d["queue"] = queue_.size();
+  }
+  d["queue_capacity"] = config_.queue_capacity;
+  d["peak_queue"] = peak_queue_.load();
+  d["db_path"] = config_.db_path;
+  d["stored_blocks"] = stored_blocks_.load();
+  d["stored_commands"] = stored_commands_.load();
+  d["duplicates"] = duplicates_.load();
+  d["replays"] = replays_.load();
+  d["recovery_requests"] = recovery_requests_.load();
+  std::lock_guard<std::mutex> lock(summary_mutex_);
+  d["experiments"] = summary_;
+  return d;
+}
+
+void LoggerService::Poll(int timeout_ms) {
+  transport_.Handle(timeout_ms);
+  if (reporter_.Due()) reporter_.Maybe("running", Details().dump(), true);
+}
+
+}  // namespace idrig
