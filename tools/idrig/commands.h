@@ -7,4 +7,5 @@ void RegisterIdentifyCommand(CLI::App& app);
 void RegisterExampleCommand(CLI::App& app);
 void RegisterSimulateCommand(CLI::App& app);
 void RegisterExciteCommand(CLI::App& app);  // cmd_excite.cc
+void RegisterGapCommand(CLI::App& app);     // cmd_gap.cc
 }  // namespace idrig

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   idrig::RegisterExampleCommand(app);
   idrig::RegisterSimulateCommand(app);
   idrig::RegisterExciteCommand(app);
+  idrig::RegisterGapCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

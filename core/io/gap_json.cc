@@ -1,0 +1,136 @@
+#include "core/io/gap_json.h"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "core/io/model_json.h"
+
+namespace idrig {
+namespace {
+
+nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+nlohmann::json Params(const Effect& effect, const std::vector<double>* stds = nullptr) {
+  nlohmann::json p = nlohmann::json::object();
+  const auto& names = EffectParameterNames(effect.kind);
+  for (size_t i = 0; i < names.size() && i < effect.params.size(); ++i) {
+    if (stds && i < stds->size()) {
+      p[names[i]] = {{"value", Number(effect.params[i])}, {"std", Number((*stds)[i])}};
+    } else {
+      p[names[i]] = Number(effect.params[i]);
+    }
+  }
+  return p;
+}
+
+}  // namespace
+
+nlohmann::json EffectToJson(const Effect& effect) {
+  return {{"effect", EffectName(effect.kind)}, {"params", Params(effect)}};
+}
+
+nlohmann::json GapReportToJson(const GapReport& report) {
+  const GapVerdict& v = report.verdict;
+  nlohmann::json verdict = {
+      {"effect", v.effect},
+      {"confidence", v.confidence},
+      {"nrmse_before", v.nrmse_before},
+      {"nrmse_after", v.nrmse_after},
+      {"shrink", v.shrink},
+      {"effect_fitted", EffectName(v.params.kind)},
+      {"params", Params(v.params)},
+      {"params_std", Params(Effect{v.params.kind, v.param_std})},
+      {"plant", ModelToJson(v.plant)},
+      {"explanation", v.explanation},
+  };
+  if (!v.tied.empty()) verdict["tied"] = v.tied;
+
+  nlohmann::json ranking = nlohmann::json::array();
+  for (const auto& c : report.ranking) {
+    ranking.push_back({
+        {"effect", EffectName(c.effect.kind)},
+        {"nrmse_after", c.nrmse_after},
+        {"score", c.score},
+        {"bic", c.bic},
+        {"eligible", c.eligible},
+        {"likelihood_ratio", c.likelihood_ratio},
+        {"lr_threshold", c.lr_threshold},
+        {"significant", c.significant},
+        {"signature", c.signature},
+        {"estimation_mse", c.estimation_mse},
+        {"validation_mse", c.validation_mse},
+        {"parameters", c.parameters},
+        {"params", Params(c.effect, &c.param_std)},
+        {"plant", ModelToJson(c.plant)},
+        {"evaluations", c.evaluations},
+        {"note", c.note},
+    });
+  }
+
+  const GapWhere& w = report.where;
+  nlohmann::json bands = nlohmann::json::array();
+  for (const auto& b : w.bands)
+    bands.push_back({{"f_lo_hz", b.f_lo_hz}, {"f_hi_hz", b.f_hi_hz}, {"gap_power", b.gap_power},
+                     {"coherence", b.coherence}, {"coherence_threshold", b.coherence_threshold},
+                     {"significant", b.significant}});
+  nlohmann::json factors = nlohmann::json::object();
+  for (const auto& f : w.factors) {
+    nlohmann::json bins = nlohmann::json::array();
+    for (const auto& b : f.bins)
+      bins.push_back({{"label", b.label}, {"samples", b.samples}, {"mean", b.mean}, {"rms", b.rms}});
+    factors[f.name] = {{"eta_squared", f.eta_squared}, {"rms_ratio", f.rms_ratio}, {"bins", bins}};
+  }
+  nlohmann::json where = {
+      {"nrmse_before", w.nrmse_before},
+      {"noise_nrmse", w.noise_nrmse},
+      {"gap_to_noise", w.gap_to_noise},
+      {"gap_significant", w.gap_significant},
+      {"residual_white", w.residual_white},
+      {"residual_independent", w.residual_independent},
+      {"bands", bands},
+      {"factors", factors},
+      {"summary", w.summary},
+  };
+  return {{"format", "idrig.gap/1"},
+          {"verdict", verdict},
+          {"ranking", ranking},
+          {"where", where},
+          {"notes", report.notes},
+          {"estimation_samples", report.estimation_samples},
+          {"validation_samples", report.validation_samples}};
+}
+
+std::string GapReportText(const GapReport& report) {
+  std::ostringstream s;
+  const GapVerdict& v = report.verdict;
+  s << std::setprecision(4);
+  s << "verdict: " << v.effect;
+  if (!v.tied.empty()) s << " (" << v.tied[0] << " or " << v.tied[1] << ")";
+  s << "  confidence " << v.confidence << "\n";
+  s << "  " << v.explanation << "\n";
+  s << "  validation NRMSE before " << v.nrmse_before << ", after " << v.nrmse_after
+    << ", noise floor " << report.where.noise_nrmse << "\n";
+  const auto& names = EffectParameterNames(v.params.kind);
+  for (size_t i = 0; i < names.size() && i < v.params.params.size(); ++i) {
+    s << "  " << names[i] << " = " << v.params.params[i];
+    if (i < v.param_std.size() && std::isfinite(v.param_std[i])) s << " ± " << v.param_std[i];
+    s << "\n";
+  }
+  s << "where: " << report.where.summary << "\n";
+  s << "ranking (validation BIC; eligible = significant on estimation data and matching the gap):\n";
+  s << "  " << std::left << std::setw(22) << "effect" << std::setw(12) << "NRMSE" << std::setw(10)
+    << "score" << std::setw(10) << "LR/thr" << "signature\n";
+  for (const auto& c : report.ranking) {
+    std::ostringstream lr;
+    lr << std::setprecision(3) << c.likelihood_ratio / std::max(c.lr_threshold, 1e-12);
+    s << "  " << std::left << std::setw(22) << EffectName(c.effect.kind) << std::setw(12)
+      << c.nrmse_after << std::setw(10) << c.score << std::setw(10)
+      << (c.effect.kind == EffectKind::kNone ? "-" : lr.str()) << c.signature
+      << (c.eligible ? "" : "  (not eligible)") << "\n";
+  }
+  for (const auto& n : report.notes) s << "note: " << n << "\n";
+  return s.str();
+}
+
+}  // namespace idrig

@@ -1,0 +1,15 @@
+#pragma once
+// The gap diagnosis report as JSON (the stable interface of `idrig gap diagnose --json`, stored
+// in the catalogue by the workers) and as text. Keys are documented in docs/gap.md.
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/numeric/gap_diagnosis.h"
+
+namespace idrig {
+
+nlohmann::json EffectToJson(const Effect& effect);
+nlohmann::json GapReportToJson(const GapReport& report);
+std::string GapReportText(const GapReport& report);
+
+}  // namespace idrig
