@@ -127,12 +127,22 @@ class Candidate {
         return 2;
       case EffectKind::kSensorNonlinearity:
         return fixed.empty() ? 2 : 0;  // polynomial a2, a3; or |y| (fixed = {1})
+      case EffectKind::kOutputQuantization:
+        return 1;  // q fixed by the samples' lattice; fitted: the noise before the rounding
       default:
-        return 0;  // none, parameter_mismatch, output_quantization (q fixed by its grid)
+        return 0;  // none, parameter_mismatch
     }
   }
 
-  int PlantParams() const { return static_cast<int>(free_den_.size() + free_num_.size()); }
+  int PlantParams() const {
+    return static_cast<int>(free_den_.size() + free_num_.size()) + (gain_only_ ? 1 : 0);
+  }
+  // Only the plant's gain moves (one multiplier on num): a gap that is a pure gain change.
+  void SetGainOnly() {
+    free_den_.clear();
+    free_num_.clear();
+    gain_only_ = true;
+  }
   int EffectParams() const { return effect_params_; }
   int Size() const { return PlantParams() + EffectParams(); }
 
@@ -141,6 +151,7 @@ class Candidate {
     int j = 0;
     for (int i : free_den_) g.den(i) *= std::exp(std::clamp(x(j++), -20.0, 20.0));
     for (int i : free_num_) g.num(i) *= std::exp(std::clamp(x(j++), -20.0, 20.0));
+    if (gain_only_) g.num *= std::exp(std::clamp(x(j++), -20.0, 20.0));
     return g;
   }
 
@@ -203,6 +214,7 @@ class Candidate {
       case EffectKind::kSensorNonlinearity:
         if (effect_params_ == 2) phi << p[1] * s.y_max, p[2] * s.y_max * s.y_max;
         break;
+      case EffectKind::kOutputQuantization: phi(0) = std::log(p[0]); break;  // s/q
       default: break;
     }
     return phi;
@@ -211,6 +223,26 @@ class Candidate {
   Eigen::VectorXd Simulate(const Eigen::VectorXd& x, const GapRecord& record) const {
     EffectSimulationOptions options;
     options.substeps = substeps_;
+    if (kind_ == EffectKind::kOutputQuantization) {
+      // The best predictor of q·round((y + n)/q) when noise n ~ N(0, s²) enters before the
+      // rounding is its conditional mean, a staircase smoothed by s (s → 0: the staircase).
+      const double q = fixed_.at(0), s = q * std::exp(std::clamp(x(x.size() - 1), -12.0, 3.0));
+      Eigen::VectorXd y = SimulateWithEffect(Plant(x), Effect{}, record.u, record.sample_time, options);
+      const int reach = static_cast<int>(std::ceil(5 * s / q)) + 1;
+      for (long k = 0; k < y.size(); ++k) {
+        const double m = std::round(y(k) / q);
+        double mean = 0;
+        for (int j = -reach; j <= reach; ++j) {
+          const double level = m + j;
+          const double upper = 0.5 * std::erfc(-((level + 0.5) * q - y(k)) / (s * M_SQRT2));
+          const double lower = 0.5 * std::erfc(-((level - 0.5) * q - y(k)) / (s * M_SQRT2));
+          mean += level * (upper - lower);
+        }
+        // Levels beyond the reach carry < 1e-6 of the probability.
+        y(k) = q * mean;
+      }
+      return y;
+    }
     return SimulateWithEffect(Plant(x), EffectOf(x), record.u, record.sample_time, options);
   }
 
@@ -223,6 +255,7 @@ class Candidate {
   int substeps_;
   std::vector<double> fixed_;
   std::vector<int> free_den_, free_num_;
+  bool gain_only_ = false;
   int effect_params_ = 0;
 };
 
@@ -334,6 +367,8 @@ std::vector<std::vector<double>> Starts(EffectKind kind, const Scales& s) {
     }
     case EffectKind::kOutputSaturation:
       return {{s.y_quantile[0], s.y_quantile[3]}, {s.y_quantile[1], s.y_quantile[2]}};
+    case EffectKind::kOutputQuantization:
+      return {{0.05}, {0.3}};  // noise before the rounding, as a share of q
     case EffectKind::kSensorNonlinearity:
       return {{1.0, 0.0, 0.0, 0.0}, {1.0, 0.1 / s.y_max, 0.0, 0.0}, {1.0, 0.0, -0.1 / (s.y_max * s.y_max), 0.0}};
     default:
@@ -350,21 +385,45 @@ double QuantisationStep(const std::vector<GapRecord>& records, double* strength)
     for (long k = r.score_from; k < r.y.size(); ++k) y.push_back(r.y(k));
   double span = *std::max_element(y.begin(), y.end()) - *std::min_element(y.begin(), y.end());
   if (!(span > 0)) span = 1;
-  std::vector<std::pair<double, double>> table;
-  const int grid = 600;
-  for (int i = 0; i < grid; ++i) {
-    const double q = span * std::pow(10.0, -4.0 + 3.3 * i / (grid - 1));  // span/1e4 … span/2
+  auto resultant = [&y](double q) {
     std::complex<double> sum = 0;
     for (double v : y) sum += std::polar(1.0, 2 * M_PI * v / q);
-    table.push_back({q, std::abs(sum) / y.size()});
+    return std::abs(sum) / y.size();
+  };
+  // Coarse logarithmic grid span/3000 … span/3 (0.35 % apart: a lattice of up to ~300 steps
+  // stays in phase), then a fine search around the chosen step.
+  std::vector<std::pair<double, double>> table;
+  const int grid = 2000;
+  for (int i = 0; i < grid; ++i) {
+    const double q = span * std::pow(10.0, -3.5 + 3.0 * i / (grid - 1));
+    table.push_back({q, resultant(q)});
   }
   double best = 0;
   for (auto& [q, r] : table) best = std::max(best, r);
+  // The largest-q local maximum that is within half of the best: q itself, not q/2, q/3, ….
   double step = table.front().first;
-  for (auto& [q, r] : table)
-    if (r >= 0.5 * best) step = q;
-  *strength = best;
-  return step;
+  for (size_t i = 1; i + 1 < table.size(); ++i)
+    if (table[i].second >= 0.5 * best && table[i].second >= table[i - 1].second &&
+        table[i].second >= table[i + 1].second)
+      step = table[i].first;
+  double refined = step, refined_r = resultant(step);
+  for (int i = -100; i <= 100; ++i) {
+    const double q = step * (1 + 0.005 * i / 100);
+    const double r = resultant(q);
+    if (r > refined_r) refined = q, refined_r = r;
+  }
+  *strength = refined_r;
+  return refined;
+}
+
+// Every sample within 2 % of the range from the minimum or the maximum.
+bool BinaryInput(const std::vector<GapRecord>& records) {
+  for (const auto& r : records) {
+    const double lo = r.u.minCoeff(), hi = r.u.maxCoeff(), tol = 0.02 * (hi - lo);
+    for (long k = r.score_from; k < r.u.size(); ++k)
+      if (std::abs(r.u(k) - lo) > tol && std::abs(r.u(k) - hi) > tol) return false;
+  }
+  return true;
 }
 
 double Correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
@@ -479,6 +538,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const Eigen::VectorXd y_refit_val =
       Stack(validation, [&](const GapRecord& r) { return refit.Simulate(refit_fit.x, r); });
 
+  const Eigen::VectorXd zero_plant = Eigen::VectorXd::Zero(refit.Size());
   double q_strength = 0;
   const double q_step = QuantisationStep(estimation, &q_strength);
 
@@ -515,14 +575,17 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
         Residuals residuals{&cand, &estimation, n_est};
         FitOutcome best;
         int evaluations = 0;
-        for (const auto& start : Starts(kind, scales)) {
-          Eigen::VectorXd x0(cand.Size());
-          x0.head(cand.PlantParams()) = refit_fit.x;
-          if (cand.EffectParams() > 0) x0.tail(cand.EffectParams()) = cand.Phi(start);
-          FitOutcome f = Minimise(residuals, x0, options.evaluations_per_start * (cand.Size() + 1));
-          evaluations += f.evaluations;
-          if (!(f.mse >= best.mse)) best = f;  // also takes the first (best.mse is NaN)
-        }
+        // Starts: the plant as given (right when the effect is the whole gap) and as refitted
+        // (which has already absorbed what a linear refit can), times the effect's starts.
+        for (const Eigen::VectorXd* plant_start : {&refit_fit.x, &zero_plant})
+          for (const auto& start : Starts(kind, scales)) {
+            Eigen::VectorXd x0(cand.Size());
+            x0.head(cand.PlantParams()) = *plant_start;
+            if (cand.EffectParams() > 0) x0.tail(cand.EffectParams()) = cand.Phi(start);
+            FitOutcome f = Minimise(residuals, x0, options.evaluations_per_start * (cand.Size() + 1));
+            evaluations += f.evaluations;
+            if (!(f.mse >= best.mse)) best = f;  // also takes the first (best.mse is NaN)
+          }
         FitOutcome polished =
             Minimise(residuals, best.x, options.evaluations_polish * (cand.Size() + 1));
         evaluations += polished.evaluations;
@@ -635,10 +698,31 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     v.effect = "ambiguous";
     v.tied = {EffectName(top.effect.kind), EffectName(report.ranking[1].effect.kind)};
   }
+  // A two-valued input (PRBS, random binary) passes a dead zone, backlash or a symmetric
+  // saturation as a mere gain: when the gap is a pure gain change, those cannot be told from a
+  // parameter mismatch with this data.
+  if (v.effect == "parameter_mismatch" && BinaryInput(estimation) && BinaryInput(validation)) {
+    Candidate gain(g0, EffectKind::kParameterMismatch, true, scales, options.substeps);
+    gain.SetGainOnly();
+    Residuals gain_residuals{&gain, &estimation, n_est};
+    const FitOutcome gain_fit = Minimise(gain_residuals, Eigen::VectorXd::Zero(1), 200);
+    const double lr = n_est * std::log(gain_fit.mse / refit_fit.mse);
+    const int dof = std::max(1, refit.Size() - 1);
+    if (lr < ChiSquareQuantile(1 - options.significance, dof)) {
+      v.effect = "ambiguous";
+      v.tied = {"parameter_mismatch", "dead_zone", "backlash", "input_saturation"};
+      report.notes.push_back(
+          "the input takes two values only, and the gap is a pure gain change (gain-only refit "
+          "not worse: LR " + std::to_string(lr) + "): input dead zone, backlash and symmetric "
+          "saturation act as a gain on such a signal and cannot be told from a parameter "
+          "mismatch; excite at several amplitudes to separate them");
+    }
+  }
   if (v.effect == "none")
     v.explanation = "no candidate explains the gap better than noise: G0 fits within the noise";
   else if (v.effect == "ambiguous")
-    v.explanation = "the top two candidates (" + v.tied[0] + ", " + v.tied[1] +
+    v.explanation = "the top candidates (" + v.tied[0] + ", " + v.tied[1] +
+                    (v.tied.size() > 2 ? ", …" : "") +
                     ") fit the validation data equally well; more informative data would separate them";
   else
     v.explanation = v.effect + " closes " + std::to_string(int(std::round(100 * v.shrink))) +

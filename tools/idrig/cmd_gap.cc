@@ -1,6 +1,8 @@
 // idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--json]
 // idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--jobs J] [--json]
 #include <atomic>
+#include <chrono>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -52,7 +54,21 @@ struct BenchOutcome {
   std::string excitation;
 };
 
-void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bool json) {
+void WriteCase(const GapCase& c, const std::string& dir, int index) {
+  const std::string base = dir + "/case" + std::to_string(index);
+  WriteModelFile(LtiModel(c.sim), base + "-sim.json");
+  WriteIoRecordCsv(MakeIoRecord(c.estimation.u, c.estimation.y, c.estimation.sample_time), base + "-est.csv");
+  WriteIoRecordCsv(MakeIoRecord(c.validation.u, c.validation.y, c.validation.sample_time), base + "-val.csv");
+  nlohmann::json truth = EffectToJson(c.effect);
+  truth["effect"] = EffectName(c.truth);
+  truth["real"] = ModelToJson(c.real);
+  truth["noise_sigma"] = c.noise_sigma;
+  truth["excitation"] = c.excitation;
+  std::ofstream(base + "-truth.json") << truth.dump(2) << "\n";
+}
+
+void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bool json,
+              const std::string& dump_dir) {
   const auto& kinds = AllEffects();
   std::vector<BenchOutcome> outcomes(cases);
   std::atomic<int> next{0};
@@ -66,6 +82,7 @@ void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bo
       options.snr_db = snr_db;
       options.samples = samples;
       const GapCase c = MakeGapCase(truth, rng, options);
+      if (!dump_dir.empty()) WriteCase(c, dump_dir, i);
       const auto start = std::chrono::steady_clock::now();
       const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation});
       BenchOutcome& o = outcomes[i];
@@ -171,6 +188,7 @@ void RegisterGapCommand(CLI::App& app) {
     uint64_t seed = 1;
     double snr = 30;
     bool json = false;
+    std::string dump;
   };
   auto b = std::make_shared<BenchArgs>();
   auto* bench = gap->add_subcommand(
@@ -181,7 +199,8 @@ void RegisterGapCommand(CLI::App& app) {
   bench->add_option("--samples", b->samples, "samples per record")->check(CLI::Range(200, 10000000));
   bench->add_option("--jobs", b->jobs, "parallel diagnoses")->check(CLI::Range(1, 64));
   bench->add_flag("--json", b->json, "print the summary as JSON");
-  bench->callback([b] { RunBench(b->cases, b->seed, b->snr, b->samples, b->jobs, b->json); });
+  bench->add_option("--dump", b->dump, "also write each case (sim model, records, truth) to this directory");
+  bench->callback([b] { RunBench(b->cases, b->seed, b->snr, b->samples, b->jobs, b->json, b->dump); });
 }
 
 }  // namespace idrig
