@@ -1,0 +1,138 @@
+// The gap diagnosis on generated rigs whose withheld effect is known by construction (the
+// generator simulates the rig 4× finer than the diagnosis for the feedback effects), plus the
+// bad-input cases. The full blind benchmark is `idrig gap bench` (docs/gap.md), not a test.
+#include "core/numeric/gap_diagnosis.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "core/numeric/gap_bench.h"
+
+namespace idrig {
+namespace {
+
+GapCase Case(EffectKind truth, uint64_t seed, const std::string& excitation = "levels") {
+  // Draw until the generator picks the requested excitation (it chooses one per case).
+  for (uint64_t s = seed;; ++s) {
+    std::mt19937_64 rng(s);
+    GapCaseOptions options;
+    options.samples = 2500;
+    GapCase c = MakeGapCase(truth, rng, options);
+    if (c.excitation == excitation) return c;
+  }
+}
+
+struct Expectation {
+  EffectKind truth;
+  uint64_t seed;
+};
+
+class DiagnosisTest : public ::testing::TestWithParam<Expectation> {};
+
+TEST_P(DiagnosisTest, FindsTheWithheldEffectAndClosesTheGapOnValidationData) {
+  const GapCase c = Case(GetParam().truth, GetParam().seed);
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation});
+  const GapVerdict& v = report.verdict;
+  std::printf("truth %-22s verdict %-22s confidence %.3f NRMSE %.4f -> %.4f shrink %.3f\n",
+              EffectName(c.truth), v.effect.c_str(), v.confidence, v.nrmse_before, v.nrmse_after,
+              v.shrink);
+  EXPECT_EQ(v.effect, EffectName(c.truth));
+  if (c.truth != EffectKind::kNone) {
+    EXPECT_GE(v.shrink, 0.8);
+    EXPECT_LT(v.nrmse_after, v.nrmse_before);
+    EXPECT_TRUE(report.where.gap_significant);
+  }
+  EXPECT_GT(v.confidence, 0.5);
+  ASSERT_EQ(report.ranking.size(), AllEffects().size());
+  EXPECT_EQ(report.ranking.front().effect.kind == c.truth, true);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Effects, DiagnosisTest,
+    ::testing::Values(Expectation{EffectKind::kNone, 11}, Expectation{EffectKind::kParameterMismatch, 12},
+                      Expectation{EffectKind::kActuatorLag, 13}, Expectation{EffectKind::kDeadZone, 14},
+                      Expectation{EffectKind::kCoulombFriction, 15},
+                      Expectation{EffectKind::kOutputQuantization, 16}),
+    [](const auto& info) { return std::string(EffectName(info.param.truth)); });
+
+TEST(GapDiagnosisTest, RecoversTheDeadZoneWidthWithinItsUncertainty) {
+  const GapCase c = Case(EffectKind::kDeadZone, 21);
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation});
+  ASSERT_EQ(report.verdict.effect, "dead_zone");
+  const double truth = c.effect.params[0], fitted = report.verdict.params.params[0];
+  const double sigma = report.verdict.param_std[0];
+  std::printf("dead zone: true %.4f, fitted %.4f ± %.4f\n", truth, fitted, sigma);
+  EXPECT_NEAR(fitted, truth, 0.05 * truth);
+  EXPECT_TRUE(std::isfinite(sigma));
+  EXPECT_GT(sigma, 0.0);
+}
+
+TEST(GapDiagnosisTest, BinaryInputCannotSeparateInputNonlinearityFromGain) {
+  // On a two-valued input a dead zone is a gain: the verdict says so instead of guessing.
+  const GapCase c = Case(EffectKind::kDeadZone, 31, "rbs");
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation});
+  EXPECT_EQ(report.verdict.effect, "ambiguous");
+  ASSERT_FALSE(report.verdict.tied.empty());
+  bool names_dead_zone = false;
+  for (const auto& t : report.verdict.tied) names_dead_zone |= t == "dead_zone";
+  EXPECT_TRUE(names_dead_zone);
+  ASSERT_FALSE(report.notes.empty());
+  EXPECT_NE(report.notes.back().find("two values"), std::string::npos);
+}
+
+TEST(GapDiagnosisTest, OneRecordIsSplitInTimeAndSaysSo) {
+  const GapCase c = Case(EffectKind::kTimeDelay, 41);
+  GapRecord whole;
+  whole.sample_time = c.estimation.sample_time;
+  whole.u.resize(2 * c.estimation.u.size());
+  whole.u << c.estimation.u, c.validation.u;
+  whole.y.resize(2 * c.estimation.y.size());
+  whole.y << c.estimation.y, c.validation.y;
+  const GapReport report = DiagnoseGap(c.sim, {whole}, {});
+  ASSERT_FALSE(report.notes.empty());
+  EXPECT_NE(report.notes.front().find("first half"), std::string::npos);
+  EXPECT_EQ(report.verdict.effect, "time_delay");
+  EXPECT_EQ(report.validation_samples, static_cast<int>(whole.u.size() - whole.u.size() / 2));
+}
+
+std::string ErrorOf(const TransferFunction& sim, const std::vector<GapRecord>& est,
+                    const std::vector<GapRecord>& val = {}) {
+  try {
+    DiagnoseGap(sim, est, val);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(GapDiagnosisTest, BadInputGetsClearErrors) {
+  const GapCase c = Case(EffectKind::kNone, 51);
+  GapRecord nan = c.estimation;
+  nan.y(17) = NAN;
+  EXPECT_NE(ErrorOf(c.sim, {nan}, {c.validation}).find("sample 18 is NaN"), std::string::npos);
+  GapRecord constant = c.estimation;
+  constant.u.setConstant(0.5);
+  EXPECT_NE(ErrorOf(c.sim, {constant}, {c.validation}).find("the input is constant"), std::string::npos);
+  GapRecord short_record = c.estimation;
+  short_record.u.conservativeResize(50);
+  short_record.y.conservativeResize(50);
+  EXPECT_NE(ErrorOf(c.sim, {short_record}).find("too short to split"), std::string::npos);
+  GapRecord uneven = c.estimation;
+  uneven.y.conservativeResize(uneven.y.size() - 1);
+  EXPECT_NE(ErrorOf(c.sim, {uneven}, {c.validation}).find("u has 2500 samples but y has 2499"),
+            std::string::npos);
+  GapRecord other_rate = c.validation;
+  other_rate.sample_time *= 2;
+  EXPECT_NE(ErrorOf(c.sim, {c.estimation}, {other_rate}).find("differs from"), std::string::npos);
+  TransferFunction discrete = c.sim;
+  discrete.sample_time = 0.05;  // the data are at 0.01 s
+  discrete.den = Eigen::Vector2d(1.0, -0.5);
+  discrete.num = Eigen::VectorXd::Constant(1, 0.5);
+  EXPECT_NE(ErrorOf(discrete, {c.estimation}, {c.validation}).find("sample time"), std::string::npos);
+  EXPECT_NE(ErrorOf(c.sim, {}).find("no estimation records"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace idrig
