@@ -6,8 +6,10 @@
 #include <unsupported/Eigen/NumericalDiff>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <functional>
+#include <thread>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -62,8 +64,14 @@ TransferFunction ContinuousSimModel(const TransferFunction& sim, double ts) {
   const StateSpace d = ToStateSpace(undelayed);
   const int n = d.Order();
   const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(n, n);
-  if (std::abs((d.A - identity).determinant()) < 1e-12 || d.A.eigenvalues().cwiseAbs().minCoeff() < 1e-9)
-    Fail("the discrete sim model has a pole at z = 1 or z = 0; give a continuous model");
+  const Eigen::VectorXcd poles = d.A.eigenvalues();
+  for (int i = 0; i < poles.size(); ++i)
+    if (std::abs(poles(i).imag()) < 1e-9 * std::max(1.0, std::abs(poles(i))) && poles(i).real() <= 1e-9)
+      Fail("the discrete sim model has a pole at z = " + std::to_string(poles(i).real()) +
+           " on the non-positive real axis, so it has no continuous equivalent; give a continuous "
+           "model (or identify one of lower order)");
+  if (std::abs((d.A - identity).determinant()) < 1e-12)
+    Fail("the discrete sim model has a pole at z = 1; give a continuous model");
   StateSpace c = d;
   c.A = d.A.log() / ts;
   c.B = (d.A - identity).partialPivLu().solve(c.A * d.B);
@@ -546,9 +554,8 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     CandidateFit fit;
     Eigen::VectorXd y_val;
   };
-  std::vector<Work> work;
   const int k_effects = std::max<int>(1, static_cast<int>(kinds.size()) - 2);
-  for (EffectKind kind : kinds) {
+  auto fit_one = [&](EffectKind kind) {
     Work w;
     CandidateFit& c = w.fit;
     if (kind == EffectKind::kNone) {
@@ -652,7 +659,34 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     } else {
       c.signature = Correlation(w.y_val - y_refit_val, y_val - y_refit_val);
     }
-    work.push_back(std::move(w));
+    return w;
+  };
+  // The candidates are independent: fit them on `threads` threads (results do not depend on
+  // the schedule; each candidate is fitted deterministically).
+  std::vector<Work> work(kinds.size());
+  {
+    const int threads = std::max(1, std::min<int>(static_cast<int>(kinds.size()),
+                                                  options.threads > 0 ? options.threads
+                                                                      : static_cast<int>(std::thread::hardware_concurrency())));
+    std::atomic<size_t> next{0};
+    std::vector<std::string> errors(kinds.size());
+    auto run = [&] {
+      for (size_t i = next++; i < kinds.size(); i = next++) {
+        try {
+          work[i] = fit_one(kinds[i]);
+        } catch (const std::exception& e) {
+          errors[i] = e.what();
+        }
+      }
+    };
+    std::vector<std::thread> pool;
+    for (int t = 1; t < threads; ++t) pool.emplace_back(run);
+    run();
+    for (auto& t : pool) t.join();
+    for (size_t i = 0; i < kinds.size(); ++i)
+      if (!errors[i].empty())
+        throw std::invalid_argument(std::string("gap diagnosis: fitting ") + EffectName(kinds[i]) +
+                                    " failed: " + errors[i]);
   }
 
   // Eligibility: an effect must beat the refitted G0 significantly and reproduce the gap's

@@ -41,9 +41,10 @@ struct GapOptions {
   double ambiguity_bic = 2.0;    // top two closer than this in BIC → "ambiguous"
   double min_signature = 0.2;    // correlation of the effect's change with the measured gap
   int substeps = 4;              // sub-steps for friction and cubic stiffness
-  int evaluations_per_start = 25;   // LM budget per start, ×(parameters + 1)
+  int evaluations_per_start = 10;   // LM budget per start, ×(parameters + 1)
   int evaluations_polish = 80;      // LM budget for the best start, ×(parameters + 1)
   std::vector<EffectKind> candidates;  // empty: every effect of the library
+  int threads = 0;               // candidates fitted in parallel; 0: one per hardware thread
 };
 
 struct BandGap {

@@ -84,7 +84,9 @@ void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bo
       const GapCase c = MakeGapCase(truth, rng, options);
       if (!dump_dir.empty()) WriteCase(c, dump_dir, i);
       const auto start = std::chrono::steady_clock::now();
-      const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation});
+      GapOptions diagnosis;
+      diagnosis.threads = 1;  // the cases run in parallel instead
+      const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, diagnosis);
       BenchOutcome& o = outcomes[i];
       o.truth = truth;
       o.verdict = report.verdict.effect;
