@@ -73,13 +73,16 @@ nlohmann::json GapReportToJson(const GapReport& report) {
   for (const auto& b : w.bands)
     bands.push_back({{"f_lo_hz", b.f_lo_hz}, {"f_hi_hz", b.f_hi_hz}, {"gap_power", b.gap_power},
                      {"coherence", b.coherence}, {"coherence_threshold", b.coherence_threshold},
+                     {"relative_error", b.relative_error},
                      {"significant", b.significant}});
   nlohmann::json factors = nlohmann::json::object();
   for (const auto& f : w.factors) {
     nlohmann::json bins = nlohmann::json::array();
     for (const auto& b : f.bins)
-      bins.push_back({{"label", b.label}, {"samples", b.samples}, {"mean", b.mean}, {"rms", b.rms}});
-    factors[f.name] = {{"eta_squared", f.eta_squared}, {"rms_ratio", f.rms_ratio}, {"bins", bins}};
+      bins.push_back({{"label", b.label}, {"samples", b.samples}, {"mean", b.mean}, {"rms", b.rms},
+                      {"relative_rms", b.relative_rms}});
+    factors[f.name] = {{"eta_squared", f.eta_squared}, {"rms_ratio", f.rms_ratio},
+                       {"relative_ratio", f.relative_ratio}, {"bins", bins}};
   }
   nlohmann::json where = {
       {"nrmse_before", w.nrmse_before},

@@ -51,7 +51,8 @@ struct BandGap {
   double f_lo_hz = 0, f_hi_hz = 0;
   double gap_power = 0;          // residual power in the band (per Hz, mean)
   double coherence = 0;          // mean |γ_ue|² over the band
-  double coherence_threshold = 0;  // 99 % level for no correlation, Beta(1, L−1)
+  double coherence_threshold = 0;  // 99.9 % level for no correlation, Beta(1, L−1)
+  double relative_error = 0;     // median |Ê(jω)/G0(jω)|, Ê = S_ue/S_uu the model-error FRF
   bool significant = false;
   double nrmse_before = 0, nrmse_after = 0;  // of the band-passed validation output
 };
@@ -60,6 +61,7 @@ struct BinnedGap {
   std::string label;             // e.g. "|u| in [0.1, 0.4)"
   int samples = 0;
   double mean = 0, rms = 0;      // of the residual y − ŷ0 in the bin
+  double relative_rms = 0;       // rms / RMS(ŷ0) in the bin: the gap relative to the signal
 };
 
 struct GapFactor {
@@ -67,6 +69,7 @@ struct GapFactor {
   std::vector<BinnedGap> bins;
   double eta_squared = 0;        // share of residual variance explained by the bin means
   double rms_ratio = 0;          // largest bin RMS / smallest bin RMS
+  double relative_ratio = 0;     // largest bin relative_rms / smallest
 };
 
 struct GapWhere {

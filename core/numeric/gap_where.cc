@@ -67,19 +67,21 @@ Spectra Welch(const std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>>& se
   return s;
 }
 
-GapFactor Binned(const std::string& name, const Eigen::VectorXd& e, const std::vector<int>& bin,
-                 const std::vector<std::string>& labels) {
+GapFactor Binned(const std::string& name, const Eigen::VectorXd& e, const Eigen::VectorXd& signal,
+                 const std::vector<int>& bin, const std::vector<std::string>& labels) {
   GapFactor f;
   f.name = name;
   const int nb = static_cast<int>(labels.size());
-  std::vector<double> sum(nb, 0), sum2(nb, 0);
+  std::vector<double> sum(nb, 0), sum2(nb, 0), signal2(nb, 0);
   std::vector<int> count(nb, 0);
   for (long k = 0; k < e.size(); ++k) {
     if (bin[k] < 0) continue;
     sum[bin[k]] += e(k);
     sum2[bin[k]] += e(k) * e(k);
+    signal2[bin[k]] += signal(k) * signal(k);
     ++count[bin[k]];
   }
+  double rel_min = INFINITY, rel_max = 0;
   const double mean = e.mean();
   const double total = (e.array() - mean).square().sum();
   double between = 0, rms_min = INFINITY, rms_max = 0;
@@ -91,15 +93,21 @@ GapFactor Binned(const std::string& name, const Eigen::VectorXd& e, const std::v
       g.mean = sum[b] / count[b];
       g.rms = std::sqrt(sum2[b] / count[b]);
       between += count[b] * (g.mean - mean) * (g.mean - mean);
+      g.relative_rms = signal2[b] > 0 ? std::sqrt(sum2[b] / signal2[b]) : 0;
       if (count[b] >= 10) {
         rms_min = std::min(rms_min, g.rms);
         rms_max = std::max(rms_max, g.rms);
+        if (g.relative_rms > 0) {
+          rel_min = std::min(rel_min, g.relative_rms);
+          rel_max = std::max(rel_max, g.relative_rms);
+        }
       }
     }
     f.bins.push_back(g);
   }
   f.eta_squared = total > 0 ? between / total : 0;
   f.rms_ratio = rms_min > 0 && std::isfinite(rms_min) ? rms_max / rms_min : 1;
+  f.relative_ratio = rel_min > 0 && std::isfinite(rel_min) ? rel_max / rel_min : 1;
   return f;
 }
 
@@ -187,9 +195,11 @@ GapWhere LocateGap(const TransferFunction& sim_model, const std::vector<GapRecor
   if (shortest >= length) {
     const Spectra s = Welch(ue, ts, length);
     const double white_psd = 2 * ts * noise_sigma * noise_sigma;  // one-sided PSD of σ² noise
-    const int k_avg = std::max(2, s.averages);
-    const double coh_threshold = 1 - std::pow(0.01, 1.0 / (k_avg - 1));  // Beta(1, K−1) at 99 %
+    // Hann windows with 50 % overlap: about 0.9 K independent averages.
+    const int k_avg = std::max(2, static_cast<int>(0.9 * s.averages));
+    const double coh_threshold = 1 - std::pow(0.001, 1.0 / (k_avg - 1));  // Beta(1, K−1), 99.9 %
     const double f_lo = s.freq_hz[1], f_hi = s.freq_hz.back();
+    const double max_uu = *std::max_element(s.uu.begin() + 1, s.uu.end());
     const int n_bands = 8;
     for (int b = 0; b < n_bands; ++b) {
       BandGap band;
@@ -197,6 +207,7 @@ GapWhere LocateGap(const TransferFunction& sim_model, const std::vector<GapRecor
       band.f_hi_hz = f_lo * std::pow(f_hi / f_lo, double(b + 1) / n_bands);
       int m = 0, exceed = 0;
       double coh = 0, power = 0;
+      std::vector<double> relative;
       for (size_t k = 1; k < s.freq_hz.size(); ++k) {
         if (s.freq_hz[k] < band.f_lo_hz || s.freq_hz[k] >= band.f_hi_hz * (b == n_bands - 1 ? 1.0001 : 1))
           continue;
@@ -204,14 +215,22 @@ GapWhere LocateGap(const TransferFunction& sim_model, const std::vector<GapRecor
         coh += g;
         exceed += g > coh_threshold;
         power += s.ee[k];
+        if (s.uu[k] > 1e-3 * max_uu) {  // excited lines only: elsewhere Ê is noise over nothing
+          const std::complex<double> g0 = FrequencyResponse(sim_model, 2 * M_PI * s.freq_hz[k]);
+          if (std::abs(g0) > 0) relative.push_back(std::abs(s.ue[k] / s.uu[k]) / std::abs(g0));
+        }
         ++m;
       }
       if (m == 0) continue;
+      if (!relative.empty()) {
+        std::nth_element(relative.begin(), relative.begin() + relative.size() / 2, relative.end());
+        band.relative_error = relative[relative.size() / 2];
+      }
       band.coherence = coh / m;
       band.coherence_threshold = coh_threshold;
       band.gap_power = power / m / white_psd;  // residual PSD relative to the noise floor
-      const double expected = 0.01 * m, spread = std::sqrt(0.01 * 0.99 * m);
-      band.significant = exceed > expected + 3 * spread + 0.5 || band.gap_power > 1.5;
+      const double expected = 0.001 * m, spread = std::sqrt(0.001 * 0.999 * m);
+      band.significant = exceed > expected + 4 * spread + 1 || band.gap_power > 1.5;
       where.bands.push_back(band);
     }
   }
@@ -220,7 +239,7 @@ GapWhere LocateGap(const TransferFunction& sim_model, const std::vector<GapRecor
   std::vector<std::string> labels;
   const Eigen::VectorXd abs_u = u_all.cwiseAbs();
   std::vector<int> bins = QuantileBins(abs_u, 4, "|u|", labels);
-  where.factors.push_back(Binned("amplitude", e_all, bins, labels));
+  where.factors.push_back(Binned("amplitude", e_all, yhat_all, bins, labels));
 
   labels.clear();
   const double v_scale = v_all.cwiseAbs().maxCoeff();
@@ -228,14 +247,14 @@ GapWhere LocateGap(const TransferFunction& sim_model, const std::vector<GapRecor
   for (long k = 0; k < n; ++k)
     vbin[k] = std::abs(v_all(k)) < 0.01 * v_scale ? 2 : (v_all(k) > 0 ? 0 : 1);
   where.factors.push_back(
-      Binned("velocity_sign", e_all, vbin, {"dy/dt > 0", "dy/dt < 0", "dy/dt ≈ 0 (|v| < 1 % of max)"}));
+      Binned("velocity_sign", e_all, yhat_all, vbin, {"dy/dt > 0", "dy/dt < 0", "dy/dt ≈ 0 (|v| < 1 % of max)"}));
   where.factors.push_back(
-      Binned("reversal", e_all, reversal_all, {"away from reversals", "within 3 samples before / 8 after a velocity reversal"}));
+      Binned("reversal", e_all, yhat_all, reversal_all, {"away from reversals", "within 3 samples before / 8 after a velocity reversal"}));
 
   labels.clear();
   bins = QuantileBins(yhat_all, 4, "simulated y", labels);
-  where.factors.push_back(Binned("output_level", e_all, bins, labels));
-  where.factors.push_back(Binned("time", e_all, time_bin_all,
+  where.factors.push_back(Binned("output_level", e_all, yhat_all, bins, labels));
+  where.factors.push_back(Binned("time", e_all, yhat_all, time_bin_all,
                                  {"first quarter", "second quarter", "third quarter", "last quarter"}));
 
   std::ostringstream summary;

@@ -136,3 +136,56 @@ TEST(GapDiagnosisTest, BadInputGetsClearErrors) {
 
 }  // namespace
 }  // namespace idrig
+
+namespace idrig {
+namespace {
+
+TEST(GapWhereTest, AResonanceGapSitsInTheBandOfTheResonance) {
+  // A first-order plant whose rig has a resonance at 30 rad/s (4.8 Hz), under a broadband
+  // random binary input: the model-error FRF relative to G0 peaks in the resonance's band.
+  TransferFunction sim;
+  sim.num = Eigen::VectorXd::Constant(1, 4.0);
+  sim.den = Eigen::Vector2d(1.0, 2.0);
+  const Effect resonance{EffectKind::kUnmodelledResonance, {30.0, 0.1}};
+  std::mt19937_64 rng(61);
+  GapRecord record;
+  record.sample_time = 0.01;
+  record.u.resize(4000);
+  for (long k = 0; k < record.u.size(); ++k) record.u(k) = (rng() & 1) ? 1.0 : -1.0;
+  const double sigma = 0.02;
+  record.y = SimulateRig(sim, resonance, record.u, record.sample_time, sigma, rng);
+  const GapWhere where = LocateGap(sim, {record}, sigma);
+  const double f_res = resonance.params[0] / (2 * M_PI);
+  bool found = false;
+  double strongest_power = 0, strongest_f = 0;
+  for (const auto& b : where.bands) {
+    if (b.relative_error > strongest_power)
+      strongest_power = b.relative_error, strongest_f = std::sqrt(b.f_lo_hz * b.f_hi_hz);
+    if (b.f_lo_hz <= f_res && f_res < b.f_hi_hz) found = b.significant;
+  }
+  std::printf("resonance at %.2f Hz; strongest band centre %.2f Hz; %s\n", f_res, strongest_f, where.summary.c_str());
+  EXPECT_TRUE(found);
+  EXPECT_TRUE(where.gap_significant);
+  EXPECT_NEAR(std::log(strongest_f), std::log(f_res), std::log(2.5));
+}
+
+TEST(GapWhereTest, ADeadZoneGapDependsOnAmplitudeAndNoGapIsWithinNoise) {
+  const GapCase dz = Case(EffectKind::kDeadZone, 62);
+  const GapWhere where = LocateGap(dz.sim, {dz.validation}, dz.noise_sigma);
+  const GapFactor* amplitude = nullptr;
+  for (const auto& f : where.factors)
+    if (f.name == "amplitude") amplitude = &f;
+  ASSERT_NE(amplitude, nullptr);
+  // The dead zone removes a constant d from |u|: relative to the signal, the gap is largest at
+  // small amplitudes.
+  EXPECT_GT(amplitude->relative_ratio, 1.5);
+  EXPECT_GT(amplitude->bins.front().relative_rms, amplitude->bins.back().relative_rms);
+  const GapCase none = Case(EffectKind::kNone, 63);
+  const GapWhere clean = LocateGap(none.sim, {none.validation}, none.noise_sigma);
+  std::printf("dead zone: %s\nnone: %s\n", where.summary.c_str(), clean.summary.c_str());
+  EXPECT_FALSE(clean.gap_significant);
+  EXPECT_NEAR(clean.gap_to_noise, 1.0, 0.1);
+}
+
+}  // namespace
+}  // namespace idrig
