@@ -13,6 +13,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev libssl-dev
   # network namespaces for the multicast tests
   iproute2 util-linux
+  # JSON checks in the command-line tests
+  jq
 )
 
 missing=()

@@ -89,20 +89,31 @@ double PiecewiseConstantSignal::ValueAt(double t) const {
 
 PiecewiseConstantSignal RandomSquareWaveDisturbance(double amplitude, double omega_min,
                                                     double omega_max, double duration,
-                                                    uint64_t seed) {
+                                                    uint64_t seed, SquareWavePhase phase,
+                                                    double start_time) {
   Require(std::isfinite(amplitude), "disturbance amplitude must be finite");
   Require(omega_min > 0.0 && omega_max >= omega_min && std::isfinite(omega_max),
           "disturbance frequencies need 0 < omega_min <= omega_max");
   Require(duration >= 0.0 && std::isfinite(duration), "duration must be >= 0");
+  Require(start_time <= 0.0 && std::isfinite(start_time), "start_time must be <= 0");
   std::mt19937_64 engine(seed);
   PiecewiseConstantSignal f;
-  double t = 0.0;
+  double t = start_time;
   while (t <= duration) {
-    // Eq. (39): f = a·sign(sin ω_f t) on t ∈ [t_c, t_c + 2π/ω_f), ω_f redrawn for the next
-    // segment. t is the experiment time (sin is not restarted), so each segment is one full
-    // period of the square wave at a random phase and integrates to zero.
+    // Eq. (39): f = a·sign(sin ω_f ·) on one period [t_c, t_c + 2π/ω_f), ω_f redrawn for the
+    // next period.
     const double omega = omega_min + (omega_max - omega_min) * UnitUniform(engine);
     const double end = t + kTwoPi / omega;
+    if (phase == SquareWavePhase::kPeriodStart) {
+      // sin ω_f(t − t_c): the positive half-wave, then the negative one.
+      f.start_times.push_back(t);
+      f.values.push_back(amplitude);
+      f.start_times.push_back(t + 0.5 * (end - t));
+      f.values.push_back(-amplitude);
+      t = end;
+      continue;
+    }
+    // sin ω_f t with the experiment time t: one full period at a random phase.
     double piece = t;
     long zero = static_cast<long>(std::floor(t * omega / (kTwoPi / 2))) + 1;  // next zero of sin
     while (piece < end) {
@@ -146,7 +157,42 @@ SineExperimentRecord SimulateSineExperiment(const SineExperimentSetup& setup, do
   std::mt19937_64 noise(setup.noise_seed);
   const auto& switches = setup.disturbance.start_times;
   size_t next_switch = 0;
+  // Advances x from `from` to `to` (to − from <= h), splitting the step at every switch of the
+  // disturbance inside it, so that f is exact.
+  auto advance = [&](Eigen::VectorXd& x, double from, double to, const Step& whole) {
+    while (next_switch < switches.size() && switches[next_switch] <= from) ++next_switch;
+    if (next_switch >= switches.size() || switches[next_switch] >= to) {
+      x = whole.phi * x + whole.gamma * setup.disturbance.ValueAt(from);
+      return;
+    }
+    double now = from;
+    while (now < to) {
+      const double end = (next_switch < switches.size() && switches[next_switch] < to)
+                             ? switches[next_switch]
+                             : to;
+      if (end > now) {
+        const Step part = Discretize(a, end - now);
+        x = part.phi * x + part.gamma * setup.disturbance.ValueAt(now);
+      }
+      now = end;
+      if (next_switch < switches.size() && switches[next_switch] <= now) ++next_switch;
+    }
+  };
   Eigen::VectorXd x = a.x0;
+  if (!switches.empty() && switches.front() < 0.0) {
+    // The disturbance acts before t0 on the plant at rest with u = 0: the oscillators are held
+    // at zero (so ũ = 0) and started at t0.
+    x.setZero();
+    const int64_t steps = static_cast<int64_t>(std::ceil(-switches.front() / sample_time));
+    double now = -static_cast<double>(steps) * sample_time;
+    for (int64_t k = 0; k < steps; ++k) {
+      const double to = -static_cast<double>(steps - k - 1) * sample_time;
+      advance(x, now, to, full);
+      now = to;
+    }
+    const int plant_and_channel = static_cast<int>(a.x0.size()) - 2 * static_cast<int>(setup.lines.size());
+    x.tail(x.size() - plant_and_channel) = a.x0.tail(x.size() - plant_and_channel);
+  }
   for (int64_t k = 0; k < num_samples; ++k) {
     const double t = static_cast<double>(k) * sample_time;
     const double eta =
@@ -156,25 +202,7 @@ SineExperimentRecord SimulateSineExperiment(const SineExperimentSetup& setup, do
     record.y[k] = (a.H_total * x)(0) + eta;
     record.natural_output[k] = (a.H_natural * x)(0) + eta;
     if (k + 1 == num_samples) break;
-    // Advance to t + h, splitting the step at every switch of the disturbance inside it.
-    const double t_next = static_cast<double>(k + 1) * sample_time;
-    while (next_switch < switches.size() && switches[next_switch] <= t) ++next_switch;
-    if (next_switch >= switches.size() || switches[next_switch] >= t_next) {
-      x = full.phi * x + full.gamma * setup.disturbance.ValueAt(t);
-      continue;
-    }
-    double now = t;
-    while (now < t_next) {
-      const double end = (next_switch < switches.size() && switches[next_switch] < t_next)
-                             ? switches[next_switch]
-                             : t_next;
-      if (end > now) {
-        const Step part = Discretize(a, end - now);
-        x = part.phi * x + part.gamma * setup.disturbance.ValueAt(now);
-      }
-      now = end;
-      if (next_switch < switches.size() && switches[next_switch] <= now) ++next_switch;
-    }
+    advance(x, t, static_cast<double>(k + 1) * sample_time, full);
   }
   return record;
 }

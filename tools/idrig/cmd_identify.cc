@@ -1,4 +1,6 @@
-// idrig identify --data FILE --method NAME [--order N] [--option key=value]... [--json]
+// idrig identify --data FILE --method NAME [--order N] [--option key=value]...
+//   [--frequencies w1,w2,...] [--json]
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -17,11 +19,39 @@ nlohmann::json ParseOptionValue(const std::string& text) {
     return text;  // a bare word is a string option
   }
 }
+
+// Methods that take a list of test frequencies as their `frequencies` option.
+bool TakesFrequencies(const std::string& method) { return method == "finite-frequency"; }
+
+// "0.2,1,5" -> [0.2, 1, 5] (rad/s); every item a positive finite number.
+nlohmann::json ParseFrequencies(const std::string& text) {
+  nlohmann::json list = nlohmann::json::array();
+  size_t start = 0;
+  while (true) {
+    const size_t comma = text.find(',', start);
+    const std::string item = text.substr(start, comma == std::string::npos ? std::string::npos
+                                                                           : comma - start);
+    size_t used = 0;
+    double value = 0.0;
+    try {
+      value = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (item.empty() || used != item.size() || !std::isfinite(value) || !(value > 0.0))
+      throw std::invalid_argument("--frequencies expects positive numbers (rad/s) separated by "
+                                  "commas, e.g. 0.2,1,5; got '" + item + "' in '" + text + "'");
+    list.push_back(value);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return list;
+}
 }  // namespace
 
 void RegisterIdentifyCommand(CLI::App& app) {
   struct Args {
-    std::string data, method = "arx", options_json;
+    std::string data, method = "arx", options_json, frequencies;
     int order = 0;
     std::vector<std::string> options;
     bool json = false;
@@ -35,8 +65,11 @@ void RegisterIdentifyCommand(CLI::App& app) {
   cmd->add_option("--order", args->order, "model order (0 or absent: chosen automatically)");
   cmd->add_option("--option", args->options, "method option key=value (value is JSON or a word); repeatable");
   cmd->add_option("--options-json", args->options_json, "method options as one JSON object");
+  CLI::Option* frequencies = cmd->add_option("--frequencies", args->frequencies,
+                  "test frequencies w1,w2,... [rad/s] (methods that take them: finite-frequency); "
+                  "the same as --option \"frequencies=[w1,w2,...]\"");
   cmd->add_flag("--json", args->json, "print the model as idrig.model/1 JSON (with an \"identification\" report)");
-  cmd->callback([args] {
+  cmd->callback([args, frequencies] {
     nlohmann::json options = args->options_json.empty() ? nlohmann::json::object()
                                                         : nlohmann::json::parse(args->options_json);
     if (args->order > 0) options["order"] = args->order;
@@ -45,6 +78,17 @@ void RegisterIdentifyCommand(CLI::App& app) {
       if (eq == std::string::npos || eq == 0)
         throw std::invalid_argument("--option expects key=value, got '" + kv + "'");
       options[kv.substr(0, eq)] = ParseOptionValue(kv.substr(eq + 1));
+    }
+    if (frequencies->count() > 0) {
+      FindMethod(args->method);  // an unknown method is reported as such
+      if (!TakesFrequencies(args->method))
+        throw std::invalid_argument("--frequencies is for methods that take test frequencies "
+                                    "(finite-frequency); method '" + args->method +
+                                    "' does not");
+      if (options.contains("frequencies"))
+        throw std::invalid_argument("test frequencies given twice: use either --frequencies or "
+                                    "--option frequencies=[...]");
+      options["frequencies"] = ParseFrequencies(args->frequencies);
     }
     const MethodReport report = RunMethod(args->method, args->data, options);
     if (args->json) {

@@ -36,13 +36,19 @@ const double kTrueD[] = {5.24, 1.24, 0.2};  // d_1, d_2, d_3
 const double kTrueK[] = {1.0, -0.4};        // k_0, k_1
 
 // Experiment runner on plant (40): u = ρ sin ωt, disturbance (39) with a = 5, ω_f ∈ [3, 5].
-SineExperimentRunner Runner(bool disturbed, uint64_t seed) {
-  return [disturbed, seed](double amplitude, double omega, double h, long samples) {
+// The disturbance acts from kLeadTime before t0 (the plant is in operation when the test
+// signal is applied; 100 s is 20 time constants of the slowest mode), so no start-up kick of
+// the disturbance enters the filter.
+constexpr double kLeadTime = 100.0;
+SineExperimentRunner Runner(bool disturbed, uint64_t seed,
+                            SquareWavePhase phase = SquareWavePhase::kPeriodStart) {
+  return [disturbed, seed, phase](double amplitude, double omega, double h, long samples) {
     SineExperimentSetup setup;
     setup.plant = Plant40();
     setup.lines = {{omega, amplitude, 0.0}};
     if (disturbed)
-      setup.disturbance = RandomSquareWaveDisturbance(5.0, 3.0, 5.0, samples * h + 1.0, seed);
+      setup.disturbance =
+          RandomSquareWaveDisturbance(5.0, 3.0, 5.0, samples * h + 1.0, seed, phase, -kLeadTime);
     return SimulateSineExperiment(setup, h, samples).y;
   };
 }
@@ -174,33 +180,74 @@ TEST(FiniteFrequencyTest, HalvingAndDoublingFindTheNaturalFrequencyRange) {
   EXPECT_GE(up.omega_bound, 5.0);
 }
 
+// Closed-form scatter of T_lower (19) caused by the disturbance (39) read as kPeriodStart
+// (docs/finite_frequency.md): the wave integrates to F(t) = ∫f, whose per-period excess
+// X = aT²/4 − F̄T (T = 2π/ω_f, F̄ = aE[T²]/(4E[T])) is a renewal process with low-frequency
+// intensity S = E[X²]/E[T]; f = F' puts ω_1·F into the filter (6), so
+// σ(ℓ^α) = σ(ℓ^β) = (2ω_1/ρ)·sqrt(S/(2τ))·|1/d(jω_1)| and σ_T/T = σ(ℓ)·sqrt(1/α² + 1/β²).
+double PredictedLowerScatter(double omega, double rho, double tau) {
+  const double a = 5.0, w_min = 3.0, w_max = 5.0;
+  const int n = 20000;  // midpoint rule over ω_f ~ U[3, 5]
+  auto mean = [&](auto f) {
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i) sum += f(2 * kPi / (w_min + (w_max - w_min) * (i + 0.5) / n));
+    return sum / n;
+  };
+  const double e_t = mean([](double t) { return t; });
+  const double f_bar = a * mean([](double t) { return t * t; }) / (4 * e_t);
+  const double s = mean([&](double t) { return std::pow(a * t * t / 4 - f_bar * t, 2); }) / e_t;
+  const std::complex<double> d =
+      1.0 + std::complex<double>(0, 5.24 * omega) - 1.24 * omega * omega -
+      std::complex<double>(0, 0.2 * omega * omega * omega);
+  const auto g = FrequencyResponse(Plant40(), omega);
+  const double sigma = 2 * omega / rho * std::sqrt(s / (2 * tau)) / std::abs(d);
+  return sigma * std::hypot(1 / g.real(), 1 / g.imag());
+}
+
 TEST(FiniteFrequencyTest, SectionSevenWithDisturbance) {
-  // Disturbance (39), a = 5. At the paper's settings of experiment 4.1 (ω_1 = 0.05, τ = 3750;
-  // ω_1 = 0.0135, τ = 4800) single runs scatter widely around the exact value (measured over
-  // seeds 1..20: 2.3..7.8 and 3.2..7.5; the paper's single runs printed 5.27 and 4.8). The
-  // estimate is unbiased: the median of 20 seeds lies within ±10 % (it is −11.8 % over seeds
-  // 1..10 at ω_1 = 0.05 — the scatter, not a bias).
+  // Experiment 4.1 at the paper's settings (ρ = 0.03; ω_1 = 0.05, τ = 3750 → 30 periods;
+  // ω_1 = 0.0135, τ = 4800 → 10 periods), disturbance (39) with a = 5, single runs for seeds
+  // 1..20. Every single run within ±10 % is not achievable by any implementation of the filter
+  // (6) here: the disturbance's own low-frequency content gives the closed-form scatter σ_T/T
+  // = 5.7 % and 4.8 % (5.0 % with the window edges at ω_1 = 0.0135; measured over 100 seeds:
+  // 5.9 % and 6.0 %), so ≈ 10 % of single runs fall outside ±10 % — as the paper's own second
+  // run does (T = 4.8 vs 5.643: −14.9 %). Asserted: no bias (mean of 20 within ±5 % ≈ 3σ/√20),
+  // the issue's ±10 % for at least 80 % of the runs (measured 88–90 % over 100 seeds), and
+  // every run within ±20 % (≈ 3.4σ; the paper's −14.9 % is inside).
+  constexpr double kSingleRun = 0.20, kMean = 0.05, kFractionWithin10 = 0.8;
   for (const double omega : {0.05, 0.0135}) {
-    std::vector<double> values;
+    const double tau = omega == 0.05 ? 3750 : 4800;
+    const RangeExperimentOptions options = PaperSettings(omega, 0.03, tau);
+    const double exact = ExactLower(omega);
+    int within = 0;
+    double sum = 0.0, sum2 = 0.0;
+    std::printf("disturbed 4.1 ω1=%g τ=%g: T_lower (exact %.4f):", omega, tau, exact);
     for (uint64_t seed = 1; seed <= 20; ++seed) {
-      const auto step = RunRangeExperiment(Runner(true, seed),
-                                           omega, PaperSettings(omega, 0.03, omega == 0.05 ? 3750 : 4800),
-                                           false);
-      values.push_back(step.time_constant);
+      const auto step = RunRangeExperiment(Runner(true, seed), omega, options, false);
+      const double error = step.time_constant / exact - 1.0;
+      std::printf(" %.3f", step.time_constant);
+      EXPECT_LE(std::abs(error), kSingleRun) << "seed " << seed << ": T = " << step.time_constant;
+      within += std::abs(error) <= kPaperDisturbed;
+      sum += error;
+      sum2 += error * error;
     }
-    std::sort(values.begin(), values.end());
-    const double median = 0.5 * (values[9] + values[10]);
-    std::printf("disturbed ω1=%g: T_lower median %.3f, range [%.3f, %.3f], exact %.3f\n", omega,
-                median, values.front(), values.back(), ExactLower(omega));
-    EXPECT_NEAR(median / ExactLower(omega), 1.0, kPaperDisturbed);
+    const double mean = sum / 20, sd = std::sqrt(sum2 / 20 - mean * mean);
+    const double predicted = PredictedLowerScatter(omega, 0.03, std::round(tau * omega / (2 * kPi)) * 2 * kPi / omega);
+    std::printf("\n  mean %+.1f %%, sd %.1f %% (closed form %.1f %%), %d/20 within ±10 %%\n",
+                100 * mean, 100 * sd, 100 * predicted, within);
+    EXPECT_LE(std::abs(mean), kMean);
+    EXPECT_GE(within, kFractionWithin10 * 20);
   }
-  // Experiment 5.1: at τ = 6.28 s the disturbance response (~0.3) dwarfs the response to
-  // sin 20t (~0.005) and no filter of 20 periods can separate them; with τ = 400 s every seed
-  // lands within ±10 %.
+  // Experiment 5.1: at τ = 6.28 s (20 periods of sin 20t) the window edges alone put
+  // 2(y_f(0) − y_f(τ))/(ρω_1τ) ≈ 0.005 into α — as large as α = Re w(j20) = 0.0046 itself
+  // (y_f: the disturbance's output, rms ≈ 0.2) — so no filter (6) of that length can give T_upper
+  // to ±10 % under (39) with a = 5. That edge term falls as 1/τ: with τ = 400 s (σ ≈ 2 %) every
+  // seed lands within ±10 %.
   for (uint64_t seed = 1; seed <= 5; ++seed) {
     RangeExperimentOptions options = PaperSettings(20, 1.0, 400);
-    options.skip_periods = 100;
     const auto step = RunRangeExperiment(Runner(true, seed), 20, options, true);
+    std::printf("disturbed 5.1 ω1=20 τ=%.1f seed %d: T_upper %.4f (exact %.4f)\n", step.tau,
+                static_cast<int>(seed), step.time_constant, ExactUpper(20));
     EXPECT_NEAR(step.time_constant / ExactUpper(20), 1.0, kPaperDisturbed) << seed;
   }
 }
@@ -301,6 +348,49 @@ TEST(FiniteFrequencyTest, UnshiftIsTheInverseOfTheShift) {
   EXPECT_NEAR(d[1], 0.25, 1e-14);
   EXPECT_NEAR(k[0], 1.0, 1e-14);
   EXPECT_NEAR(k[1], 0.5, 1e-14);
+}
+
+TEST(FiniteFrequencyTest, DisturbanceThirtyNineReadings) {
+  // kPeriodStart: whole cycles, +a for π/ω_f then −a for π/ω_f, ω_f ∈ [3, 5]; covers
+  // [start_time, duration].
+  const auto f = RandomSquareWaveDisturbance(5.0, 3.0, 5.0, 50.0, 7, SquareWavePhase::kPeriodStart,
+                                             -20.0);
+  ASSERT_GE(f.start_times.size(), 2u);
+  EXPECT_DOUBLE_EQ(f.start_times.front(), -20.0);
+  EXPECT_GE(f.start_times.back() + kPi / 3, 50.0);
+  for (size_t i = 0; i + 1 < f.start_times.size(); ++i) {
+    const double half = f.start_times[i + 1] - f.start_times[i];
+    EXPECT_GE(half, kPi / 5 - 1e-12);
+    EXPECT_LE(half, kPi / 3 + 1e-12);
+    EXPECT_EQ(f.values[i], i % 2 == 0 ? 5.0 : -5.0);
+    if (i % 2 == 1) {  // the two halves of one period are equally long: ∫f = 0 per period
+      EXPECT_NEAR(half, f.start_times[i] - f.start_times[i - 1], 1e-12);
+    }
+  }
+  // kExperimentTime: sign(sin ω_f t) with the experiment time; every piece lies inside one
+  // half-wave of its ω_f, so pieces are at most π/3 long, and some are shorter than π/5 (the
+  // random phase at each redraw).
+  const auto g = RandomSquareWaveDisturbance(5.0, 3.0, 5.0, 50.0, 7,
+                                             SquareWavePhase::kExperimentTime);
+  double shortest = 1e9;
+  for (size_t i = 0; i + 1 < g.start_times.size(); ++i) {
+    shortest = std::min(shortest, g.start_times[i + 1] - g.start_times[i]);
+    EXPECT_LE(g.start_times[i + 1] - g.start_times[i], kPi / 3 + 1e-12);
+  }
+  EXPECT_LT(shortest, kPi / 5);
+  // A disturbance acting before t0: the same as simulating from its start with everything
+  // shifted by 20 s (independent run, no pre-roll), sampled from index 20/h on.
+  const double h = 0.01;
+  SineExperimentSetup early;
+  early.plant = Plant40();
+  early.disturbance = f;
+  const auto a = SimulateSineExperiment(early, h, 3001);
+  SineExperimentSetup shifted = early;
+  for (double& t : shifted.disturbance.start_times) t += 20.0;
+  const auto b = SimulateSineExperiment(shifted, h, 5001);
+  EXPECT_GT(std::abs(a.natural_output[0]), 1e-3);  // the plant is not at rest at t0
+  for (int k = 0; k < 3001; k += 7)
+    EXPECT_NEAR(a.natural_output[k], b.natural_output[k + 2000], 1e-9) << k;
 }
 
 template <typename F>
