@@ -189,3 +189,63 @@ TEST(GapWhereTest, ADeadZoneGapDependsOnAmplitudeAndNoGapIsWithinNoise) {
 
 }  // namespace
 }  // namespace idrig
+
+#include "core/numeric/excitation.h"
+
+namespace idrig {
+namespace {
+
+TEST(DiagnoseSignalTest, BlockAndSampleBySampleAgreeAndTheSegmentsAreWhereDocumented) {
+  const ExcitationSpec spec = ParseExcitationSpec("diagnose:amp=2,T=40,f1=3,seed=4");
+  EXPECT_EQ(FormatExcitationSpec(spec), "diagnose:amp=2,T=40,f1=3,seed=4");
+  const double fs = 50;
+  const Eigen::VectorXd block = GenerateExcitation(spec, fs, 4000);  // two periods
+  ExcitationGenerator generator(spec, fs);
+  for (int k = 0; k < 4000; ++k) ASSERT_EQ(generator.Next(), block(k)) << k;
+  EXPECT_TRUE(block.head(2000).isApprox(block.tail(2000), 1e-12));
+  EXPECT_DOUBLE_EQ(ExcitationPeriod(spec, fs), 40.0);
+  // Multisine blocks: RMS 0.06, 0.15, 0.3 × amp (whole multisine periods of 8 s each).
+  const double levels[3] = {0.06, 0.15, 0.3};
+  for (int b = 0; b < 3; ++b) {
+    const Eigen::VectorXd part = block.segment(b * 400, 400);
+    EXPECT_NEAR(std::sqrt(part.squaredNorm() / 400), levels[b] * 2, 1e-9 * 2);
+  }
+  // Triangle peaks ±1.2 in [24, 32) s; steps +1, −1, +2, −2 in [32, 40) s.
+  EXPECT_NEAR(block.segment(1200, 400).maxCoeff(), 1.2, 1e-9);
+  EXPECT_NEAR(block.segment(1200, 400).minCoeff(), -1.2, 1e-9);
+  EXPECT_DOUBLE_EQ(block(1650), 1.0);
+  EXPECT_DOUBLE_EQ(block(1750), -1.0);
+  EXPECT_DOUBLE_EQ(block(1850), 2.0);
+  EXPECT_DOUBLE_EQ(block(1950), -2.0);
+  try {
+    GenerateExcitation(ParseExcitationSpec("diagnose:T=10,f1=40"), fs, 10);
+    FAIL() << "f1 above Nyquist accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("not below fs/2"), std::string::npos);
+  }
+}
+
+TEST(DiagnoseSignalTest, SeparatesADeadZoneThatABinaryInputCannot) {
+  // The dead zone of BinaryInputCannotSeparateInputNonlinearityFromGain, now excited by the
+  // diagnose sequence: the verdict is the dead zone itself.
+  const GapCase c = Case(EffectKind::kDeadZone, 31, "rbs");
+  const double u_max = c.estimation.u.cwiseAbs().maxCoeff();
+  const ExcitationSpec est = ParseExcitationSpec("diagnose:T=25,f1=5,seed=1");
+  const ExcitationSpec val = ParseExcitationSpec("diagnose:T=25,f1=5,seed=2");
+  std::mt19937_64 rng(7);
+  auto record = [&](const ExcitationSpec& spec) {
+    GapRecord r;
+    r.sample_time = c.estimation.sample_time;
+    r.u = u_max * GenerateExcitation(spec, 1.0 / r.sample_time, 2500);
+    r.y = SimulateRig(c.real, c.effect, r.u, r.sample_time, c.noise_sigma, rng);
+    return r;
+  };
+  const GapReport report = DiagnoseGap(c.sim, {record(est)}, {record(val)});
+  std::printf("dead zone d = %.4f: verdict %s, fitted d = %.4f\n", c.effect.params[0],
+              report.verdict.effect.c_str(), report.verdict.params.params.empty() ? NAN : report.verdict.params.params[0]);
+  EXPECT_EQ(report.verdict.effect, "dead_zone");
+  EXPECT_NEAR(report.verdict.params.params[0], c.effect.params[0], 0.1 * c.effect.params[0]);
+}
+
+}  // namespace
+}  // namespace idrig
