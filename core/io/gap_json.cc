@@ -104,36 +104,47 @@ nlohmann::json GapReportToJson(const GapReport& report) {
           {"validation_samples", report.validation_samples}};
 }
 
-std::string GapReportText(const GapReport& report) {
+std::string GapReportText(const nlohmann::json& report) {
   std::ostringstream s;
-  const GapVerdict& v = report.verdict;
+  const auto& v = report.at("verdict");
   s << std::setprecision(4);
-  s << "verdict: " << v.effect;
-  if (!v.tied.empty()) s << " (" << v.tied[0] << " or " << v.tied[1] << ")";
-  s << "  confidence " << v.confidence << "\n";
-  s << "  " << v.explanation << "\n";
-  s << "  validation NRMSE before " << v.nrmse_before << ", after " << v.nrmse_after
-    << ", noise floor " << report.where.noise_nrmse << "\n";
-  const auto& names = EffectParameterNames(v.params.kind);
-  for (size_t i = 0; i < names.size() && i < v.params.params.size(); ++i) {
-    s << "  " << names[i] << " = " << v.params.params[i];
-    if (i < v.param_std.size() && std::isfinite(v.param_std[i])) s << " ± " << v.param_std[i];
+  s << "verdict: " << v.at("effect").get<std::string>();
+  if (v.contains("tied")) {
+    std::string tied;
+    for (const auto& t : v["tied"]) tied += (tied.empty() ? "" : " or ") + t.get<std::string>();
+    s << " (" << tied << ")";
+  }
+  s << "  confidence " << v.at("confidence").get<double>() << "\n";
+  s << "  " << v.at("explanation").get<std::string>() << "\n";
+  s << "  validation NRMSE before " << v.at("nrmse_before").get<double>() << ", after "
+    << v.at("nrmse_after").get<double>() << ", noise floor "
+    << report.at("where").at("noise_nrmse").get<double>() << "\n";
+  for (const auto& [name, value] : v.at("params").items()) {
+    s << "  " << name << " = " << value;
+    const auto& sd = v.at("params_std")[name];
+    if (sd.is_number()) s << " ± " << sd.get<double>();
     s << "\n";
   }
-  s << "where: " << report.where.summary << "\n";
+  s << "where: " << report.at("where").at("summary").get<std::string>() << "\n";
   s << "ranking (validation BIC; eligible = significant on estimation data and matching the gap):\n";
-  s << "  " << std::left << std::setw(22) << "effect" << std::setw(12) << "NRMSE" << std::setw(10)
+  s << "  " << std::left << std::setw(22) << "effect" << std::setw(12) << "NRMSE" << std::setw(12)
     << "score" << std::setw(10) << "LR/thr" << "signature\n";
-  for (const auto& c : report.ranking) {
-    std::ostringstream lr;
-    lr << std::setprecision(3) << c.likelihood_ratio / std::max(c.lr_threshold, 1e-12);
-    s << "  " << std::left << std::setw(22) << EffectName(c.effect.kind) << std::setw(12)
-      << c.nrmse_after << std::setw(10) << c.score << std::setw(10)
-      << (c.effect.kind == EffectKind::kNone ? "-" : lr.str()) << c.signature
-      << (c.eligible ? "" : "  (not eligible)") << "\n";
+  for (const auto& c : report.at("ranking")) {
+    std::ostringstream lr, score, nrmse, signature;
+    lr << std::setprecision(3)
+       << c.at("likelihood_ratio").get<double>() / std::max(c.at("lr_threshold").get<double>(), 1e-12);
+    score << std::setprecision(3) << c.at("score").get<double>();
+    nrmse << std::setprecision(4) << c.at("nrmse_after").get<double>();
+    signature << std::setprecision(3) << c.at("signature").get<double>();
+    const std::string name = c.at("effect").get<std::string>();
+    s << "  " << std::left << std::setw(22) << name << std::setw(12) << nrmse.str() << std::setw(12)
+      << score.str() << std::setw(10) << (name == "none" ? "-" : lr.str()) << signature.str()
+      << (c.at("eligible").get<bool>() ? "" : "  (not eligible)") << "\n";
   }
-  for (const auto& n : report.notes) s << "note: " << n << "\n";
+  for (const auto& n : report.at("notes")) s << "note: " << n.get<std::string>() << "\n";
   return s.str();
 }
+
+std::string GapReportText(const GapReport& report) { return GapReportText(GapReportToJson(report)); }
 
 }  // namespace idrig

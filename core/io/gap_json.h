@@ -11,5 +11,7 @@ namespace idrig {
 nlohmann::json EffectToJson(const Effect& effect);
 nlohmann::json GapReportToJson(const GapReport& report);
 std::string GapReportText(const GapReport& report);
+// The same text from a stored report (idrig.gap/1 JSON, e.g. from the catalogue).
+std::string GapReportText(const nlohmann::json& report);
 
 }  // namespace idrig

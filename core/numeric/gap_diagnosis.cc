@@ -745,6 +745,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     if (lr < ChiSquareQuantile(1 - options.significance, dof)) {
       v.effect = "ambiguous";
       v.tied = {"parameter_mismatch", "dead_zone", "backlash", "input_saturation"};
+      v.confidence = 1.0 / v.tied.size();  // nothing in the data prefers one of them
       report.notes.push_back(
           "the input takes two values only, and the gap is a pure gain change (gain-only refit "
           "not worse: LR " + std::to_string(lr) + "): input dead zone, backlash and symmetric "

@@ -23,6 +23,21 @@ verdict=$(grep -m1 '"effect":' <<<"$out" | sed 's/.*"effect": "\([a-z_]*\)".*/\1
 [ "$verdict" = "time_delay" ] || fail "verdict '$verdict', expected time_delay"
 echo "ok: time_delay case diagnosed as $verdict"
 
+# The stored report renders again as text, with SVG plots.
+"$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/case2-est.csv" \
+  --validate "$dir/case2-val.csv" --json --plots "$dir/plots" > "$dir/report.json" 2>/dev/null \
+  || fail "gap diagnose --plots exited with $?"
+rendered=$("$idrig" gap report "$dir/report.json" --plots "$dir/plots2") || fail "gap report exited with $?"
+grep -q "^verdict: time_delay" <<<"$rendered" || fail "report text: $rendered"
+for plot in gap_frequency gap_amplitude gap_state gap_time gap_ranking; do
+  for d in plots plots2; do
+    grep -q "^<svg" "$dir/$d/$plot.svg" 2>/dev/null || fail "$d/$plot.svg missing or not SVG"
+    grep -q "</svg>" "$dir/$d/$plot.svg" 2>/dev/null || fail "$d/$plot.svg truncated"
+  done
+done
+cmp -s "$dir/plots/gap_ranking.svg" "$dir/plots2/gap_ranking.svg" || fail "plots differ between diagnose and report"
+echo "ok: report and plots"
+
 # One record only: split in time, said in the notes; text output names the verdict.
 text=$("$idrig" gap diagnose --sim "$dir/case6-sim.json" --data "$dir/case6-est.csv") \
   || fail "gap diagnose (one record) exited with $?"
@@ -51,4 +66,7 @@ expect "the input is constant" "$idrig" gap diagnose --sim "$dir/case2-sim.json"
 expect "too short to split" "$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/short.csv"
 expect "sample time" "$idrig" gap diagnose --sim "$dir/discrete.json" --data "$dir/case2-est.csv"
 expect "cannot open" "$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/missing.csv"
+expect "not a gap report" "$idrig" gap report "$dir/case2-sim.json"
+echo '{"format":' > "$dir/broken.json"
+expect "not valid JSON" "$idrig" gap report "$dir/broken.json"
 exit $status

@@ -15,6 +15,7 @@
 
 #include "core/io/csv.h"
 #include "core/io/gap_json.h"
+#include "core/io/gap_svg.h"
 #include "core/io/model_json.h"
 #include "core/numeric/gap_bench.h"
 #include "core/numeric/gap_diagnosis.h"
@@ -158,6 +159,7 @@ void RegisterGapCommand(CLI::App& app) {
   struct DiagnoseArgs {
     std::string sim;
     std::vector<std::string> data, validate;
+    std::string plots;
     bool json = false;
   };
   auto d = std::make_shared<DiagnoseArgs>();
@@ -168,21 +170,45 @@ void RegisterGapCommand(CLI::App& app) {
   diagnose->add_option("--validate", d->validate, "held-out validation record CSV (repeatable); "
                                                   "absent: one record is split in time");
   diagnose->add_flag("--json", d->json, "print the report as JSON (idrig.gap/1)");
+  diagnose->add_option("--plots", d->plots, "also write SVG plots of the gap (frequency, amplitude, state, time, ranking) into this directory");
   diagnose->callback([d] {
     const TransferFunction sim = LoadSimModel(d->sim);
     std::vector<GapRecord> estimation, validation;
     for (const auto& p : d->data) estimation.push_back(LoadRecord(p));
     for (const auto& p : d->validate) validation.push_back(LoadRecord(p));
     const GapReport report = DiagnoseGap(sim, estimation, validation);
-    if (d->json) {
-      nlohmann::json out = GapReportToJson(report);
-      out["sim"] = d->sim;
-      out["data"] = d->data;
-      out["validate"] = d->validate;
-      std::cout << out.dump(2) << "\n";
-    } else {
-      std::cout << GapReportText(report);
+    nlohmann::json out = GapReportToJson(report);
+    out["sim"] = d->sim;
+    out["data"] = d->data;
+    out["validate"] = d->validate;
+    if (d->json) std::cout << out.dump(2) << "\n";
+    else std::cout << GapReportText(out);
+    if (!d->plots.empty())
+      for (const auto& path : WriteGapReportSvgs(out, d->plots)) std::cerr << "wrote " << path << "\n";
+  });
+
+  struct ReportArgs {
+    std::string source, plots;
+  };
+  auto r = std::make_shared<ReportArgs>();
+  auto* report_cmd = gap->add_subcommand(
+      "report", "render a stored diagnosis report (idrig.gap/1 JSON file) as text, with SVG plots");
+  report_cmd->add_option("report", r->source, "report file written by `gap diagnose --json`")->required();
+  report_cmd->add_option("--plots", r->plots, "write SVG plots into this directory");
+  report_cmd->callback([r] {
+    std::ifstream file(r->source);
+    if (!file) throw std::invalid_argument("cannot open report '" + r->source + "'");
+    nlohmann::json report;
+    try {
+      report = nlohmann::json::parse(file);
+    } catch (const nlohmann::json::parse_error& e) {
+      throw std::invalid_argument(r->source + ": not valid JSON: " + e.what());
     }
+    if (report.value("format", "") != "idrig.gap/1")
+      throw std::invalid_argument(r->source + ": not a gap report (format is not idrig.gap/1)");
+    std::cout << GapReportText(report);
+    if (!r->plots.empty())
+      for (const auto& path : WriteGapReportSvgs(report, r->plots)) std::cout << "plot: " << path << "\n";
   });
 
   struct BenchArgs {
