@@ -9,11 +9,13 @@ namespace idrig {
 // One line per method family; each adapter lives in its own file here.
 std::vector<MethodInfo> ArxMethods();
 std::vector<MethodInfo> FiniteFrequencyMethods();  // finite_frequency_method.cc
+std::vector<MethodInfo> StepModalMethods();        // step_modal_method.cc
+std::vector<MethodInfo> FrequencyMethods();        // frequency_method.cc
 
 const std::vector<MethodInfo>& Methods() {
   static const std::vector<MethodInfo> methods = [] {
     std::vector<MethodInfo> all;
-    for (auto family : {ArxMethods, FiniteFrequencyMethods}) {
+    for (auto family : {ArxMethods, FiniteFrequencyMethods, StepModalMethods, FrequencyMethods}) {
       auto some = family();
       all.insert(all.end(), some.begin(), some.end());
     }

@@ -102,7 +102,9 @@ TEST(FiniteFrequencyCrossCheckTest, AgreesWithArxOnTheSameMultisineRecord) {
   double arx_k[2] = {num[num.size() - 1] / d0, num.size() > 1 ? num[num.size() - 2] / d0 : 0.0};
   // A ZOH model of a relative-degree-2 plant has a numerator of full degree; its s² term is
   // the sampling zero's remnant, tiny in continuous time: checked to be negligible.
-  if (num.size() > 2) EXPECT_LT(std::abs(num[num.size() - 3] / d0), 0.02);
+  if (num.size() > 2) {
+    EXPECT_LT(std::abs(num[num.size() - 3] / d0), 0.02);
+  }
   const double true_d[3] = {5.24, 1.24, 0.2}, true_k[2] = {1.0, -0.4};
   constexpr double kCoefficients = 0.02;
   for (int i = 0; i < 3; ++i) {
