@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/numeric/excitation.h"
 
@@ -114,6 +115,12 @@ GapCase MakeGapCase(EffectKind truth, std::mt19937_64& rng, const GapCaseOptions
   c.real = c.sim;
   const char* kinds[3] = {"levels", "prbs", "rbs"};
   c.excitation = kinds[static_cast<int>(Uniform(rng, 0, 3)) % 3];
+  if (!options.excitation.empty()) {
+    if (options.excitation != "levels" && options.excitation != "prbs" && options.excitation != "rbs")
+      throw std::invalid_argument("gap case: excitation '" + options.excitation +
+                                  "' is not one of levels, prbs, rbs");
+    c.excitation = options.excitation;
+  }
   const double amplitude = Uniform(rng, 0.5, 2.0);
   const uint64_t seed = rng();
   const Eigen::VectorXd u_est = Excitation(c.excitation, bandwidth, amplitude, options, seed);

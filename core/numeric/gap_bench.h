@@ -17,6 +17,7 @@ struct GapCaseOptions {
   double snr_db = 30.0;        // output SNR (signal RMS / noise RMS in dB)
   int samples = 4000;          // per record
   double sample_time = 0.01;   // [s]
+  std::string excitation;      // "levels", "prbs", "rbs"; empty: drawn at random per case
 };
 
 struct GapCase {

@@ -96,6 +96,7 @@ double SlowTimeConstant(const TransferFunction& plant, double ts, double duratio
 
 struct Scales {
   double ts = 1, slow = 1, u_max = 1, y_max = 1;
+  double lag_of_best_match = 0;  // [s] shift of G0's output that best matches y (cross-correlation)
   double u_quantile[5] = {0, 0, 0, 0, 0};  // 2, 15, 50, 85, 98 %
   double y_quantile[4] = {0, 0, 0, 0};     // 0.5, 2, 98, 99.5 %
 };
@@ -352,7 +353,8 @@ std::vector<std::vector<double>> Starts(EffectKind kind, const Scales& s) {
   const double um = s.u_max, ts = s.ts, slow = s.slow;
   switch (kind) {
     case EffectKind::kTimeDelay:
-      return {{1.0 * ts}, {3.0 * ts}, {std::max(ts, 0.1 * slow)}, {std::max(2 * ts, 0.4 * slow)}};
+      return {{1.0 * ts}, {3.0 * ts}, {std::max(ts, 0.1 * slow)}, {std::max(2 * ts, 0.4 * slow)},
+              {std::max(ts, s.lag_of_best_match)}};
     case EffectKind::kActuatorLag:
       return {{std::max(ts, 0.05 * slow)}, {std::max(ts, 0.2 * slow)}, {std::max(ts, 0.8 * slow)}};
     case EffectKind::kUnmodelledResonance: {
@@ -368,10 +370,10 @@ std::vector<std::vector<double>> Starts(EffectKind kind, const Scales& s) {
     case EffectKind::kDeadZone:
     case EffectKind::kBacklash:
     case EffectKind::kCoulombFriction:
-      return {{0.03 * um}, {0.1 * um}, {0.3 * um}};
+      return {{0.03 * um}, {0.1 * um}, {0.3 * um}, {0.6 * um}};
     case EffectKind::kCubicStiffness: {
       const double unit = um / std::pow(s.y_max, 3);
-      return {{0.05 * unit}, {0.3 * unit}, {-0.05 * unit}};
+      return {{0.05 * unit}, {0.3 * unit}, {1.0 * unit}, {-0.05 * unit}};
     }
     case EffectKind::kOutputSaturation:
       return {{s.y_quantile[0], s.y_quantile[3]}, {s.y_quantile[1], s.y_quantile[2]}};
@@ -547,6 +549,18 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
       Stack(validation, [&](const GapRecord& r) { return refit.Simulate(refit_fit.x, r); });
 
   const Eigen::VectorXd zero_plant = Eigen::VectorXd::Zero(refit.Size());
+  {
+    // Lag that best aligns G0's output with the measured one (a delay's natural start).
+    const GapRecord& first = estimation.front();
+    const Eigen::VectorXd y0 = as_is.Simulate(no_params, first);
+    const long n = first.y.size();
+    const long max_lag = std::min<long>(n / 4, static_cast<long>(10 * scales.slow / ts) + 1);
+    double best = -INFINITY;
+    for (long lag = 0; lag <= max_lag; ++lag) {
+      const double c = first.y.tail(n - lag).dot(y0.head(n - lag)) / std::sqrt(double(n - lag));
+      if (c > best) best = c, scales.lag_of_best_match = lag * ts;
+    }
+  }
   double q_strength = 0;
   const double q_step = QuantisationStep(estimation, &q_strength);
 

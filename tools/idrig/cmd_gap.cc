@@ -69,7 +69,7 @@ void WriteCase(const GapCase& c, const std::string& dir, int index) {
 }
 
 void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bool json,
-              const std::string& dump_dir) {
+              const std::string& dump_dir, const std::string& excitation) {
   const auto& kinds = AllEffects();
   std::vector<BenchOutcome> outcomes(cases);
   std::atomic<int> next{0};
@@ -82,6 +82,7 @@ void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bo
       GapCaseOptions options;
       options.snr_db = snr_db;
       options.samples = samples;
+      options.excitation = excitation;
       const GapCase c = MakeGapCase(truth, rng, options);
       if (!dump_dir.empty()) WriteCase(c, dump_dir, i);
       const auto start = std::chrono::steady_clock::now();
@@ -106,6 +107,7 @@ void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bo
   for (auto& t : threads) t.join();
 
   std::map<std::string, std::map<std::string, int>> confusion;
+  std::map<std::string, std::pair<int, int>> by_excitation;  // correct, total
   int correct = 0, none_cases = 0, false_alarms = 0;
   std::vector<double> shrinks;
   double total_seconds = 0;
@@ -113,7 +115,9 @@ void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bo
     const std::string truth = EffectName(o.truth);
     ++confusion[truth][o.verdict];
     total_seconds += o.seconds;
+    ++by_excitation[o.excitation].second;
     if (o.verdict == truth) {
+      ++by_excitation[o.excitation].first;
       ++correct;
       if (o.truth != EffectKind::kNone) shrinks.push_back(o.shrink);
     }
@@ -132,6 +136,8 @@ void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bo
                           {"median_shrink_correct", median_shrink},
                           {"mean_seconds", cases ? total_seconds / cases : 0.0},
                           {"confusion", confusion}};
+    for (const auto& [kind, counts] : by_excitation)
+      out["top1_by_excitation"][kind] = double(counts.first) / counts.second;
     std::cout << out.dump(2) << "\n";
     return;
   }
@@ -141,7 +147,11 @@ void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bo
             << "false alarms on none " << false_alarm_rate << " (" << false_alarms << "/" << none_cases
             << ")\n"
             << "median validated shrink (right effect) " << median_shrink << "\n"
-            << "mean time per diagnosis " << (cases ? total_seconds / cases : 0.0) << " s\n"
+            << "mean time per diagnosis " << (cases ? total_seconds / cases : 0.0) << " s\n";
+  for (const auto& [kind, counts] : by_excitation)
+    std::cout << "top-1 on " << kind << " excitation " << double(counts.first) / counts.second << " ("
+              << counts.first << "/" << counts.second << ")\n";
+  std::cout
             << "confusion (rows: truth; columns: verdicts with counts)\n";
   for (const auto& [truth, row] : confusion) {
     std::cout << "  " << std::left << std::setw(22) << truth;
@@ -216,7 +226,7 @@ void RegisterGapCommand(CLI::App& app) {
     uint64_t seed = 1;
     double snr = 30;
     bool json = false;
-    std::string dump;
+    std::string dump, excitation;
   };
   auto b = std::make_shared<BenchArgs>();
   auto* bench = gap->add_subcommand(
@@ -228,7 +238,11 @@ void RegisterGapCommand(CLI::App& app) {
   bench->add_option("--jobs", b->jobs, "parallel diagnoses")->check(CLI::Range(1, 64));
   bench->add_flag("--json", b->json, "print the summary as JSON");
   bench->add_option("--dump", b->dump, "also write each case (sim model, records, truth) to this directory");
-  bench->callback([b] { RunBench(b->cases, b->seed, b->snr, b->samples, b->jobs, b->json, b->dump); });
+  bench->add_option("--excitation", b->excitation, "levels, prbs or rbs for every case (default: drawn per case)")
+      ->check(CLI::IsMember({"levels", "prbs", "rbs"}));
+  bench->callback([b] {
+    RunBench(b->cases, b->seed, b->snr, b->samples, b->jobs, b->json, b->dump, b->excitation);
+  });
 }
 
 }  // namespace idrig
