@@ -1,11 +1,7 @@
 #!/usr/bin/env bash
 # idrig gap diagnose / bench through the real binary: a generated case with a withheld effect
 # (written by `gap bench --dump`), the JSON interface scripts depend on, and bad input.
-set -uo pipefail
-idrig=$1
-dir=$(mktemp -d); trap 'rm -rf "$dir"' EXIT
-status=0
-fail() { echo "FAIL: $*"; status=1; }
+source "$(dirname "$0")/lib/common.bash"
 
 # Cases cycle through the vocabulary: case 2 is time_delay, case 6 dead_zone.
 "$idrig" gap bench --cases 7 --seed 5 --samples 2000 --dump "$dir" --json > "$dir/bench.json" 2>/dev/null \
@@ -45,16 +41,6 @@ grep -q "first half" <<<"$text" || fail "no note about the split: $text"
 grep -q "^verdict:" <<<"$text" || fail "no verdict line: $text"
 echo "ok: one record split"
 
-expect() {  # expect "fragment" command...
-  local fragment=$1; shift
-  local o rc
-  o=$("$@" 2>&1); rc=$?
-  if [ $rc -ne 2 ] || ! grep -qF -- "$fragment" <<<"$o"; then
-    fail "($rc): $* -> $o (expected '$fragment')"
-  else
-    echo "ok: $fragment"
-  fi
-}
 awk -F, 'NR == 1 { print; next } NR == 40 { print $1 "," $2 ",nan"; next } { print }' \
   "$dir/case2-est.csv" > "$dir/nan.csv"
 awk -F, 'NR == 1 { print; next } { print $1 ",0.5," $3 }' "$dir/case2-est.csv" > "$dir/const.csv"
