@@ -45,8 +45,12 @@ report() {  # report NAME EST VAL ORDER PUBLISHED
   before=$(grep -m1 '"nrmse_before":' "$work/$name-gap.json" | sed 's/.*: \([-0-9.e]*\).*/\1/')
   after=$(grep -m1 '"nrmse_after":' "$work/$name-gap.json" | sed 's/.*: \([-0-9.e]*\).*/\1/')
   shrink=$(grep -m1 '"shrink":' "$work/$name-gap.json" | sed 's/.*: \([-0-9.e]*\).*/\1/')
-  printf "%-22s verdict %-20s confidence %-6.3g NRMSE %.4f -> %.4f  shrink %.3f  (%.1f s)  published: %s\n" \
-    "$name" "$verdict" "$conf" "$before" "$after" "$shrink" "$(awk -v a="$start" -v b="$end" 'BEGIN { print b - a }')" "$published"
+  local spread
+  spread=$(awk -F, 'NR > 1 { s += $3; q += $3 * $3; n++ } END { m = s / n; print sqrt(q / n - m * m) }' "$val")
+  printf "%-20s verdict %-20s confidence %-6.3g NRMSE %.4f -> %.4f  RMS %.4g -> %.4g  shrink %.3f  (%.1f s)\n    published: %s\n" \
+    "$name" "$verdict" "$conf" "$before" "$after" "$(awk -v a="$before" -v s="$spread" 'BEGIN { print a * s }')" \
+    "$(awk -v a="$after" -v s="$spread" 'BEGIN { print a * s }')" "$shrink" \
+    "$(awk -v a="$start" -v b="$end" 'BEGIN { print b - a }')" "$published"
   "$idrig" gap diagnose --sim "$work/$name-sim.json" --data "$est" --validate "$val" | sed -n '/^ranking/,/^note/p' | head -8
 }
 
