@@ -60,61 +60,7 @@ SampledPlant Sample(const TransferFunction& plant, double step) {
   return s;
 }
 
-Eigen::VectorXd SimulateLinear(const SampledPlant& p, const Eigen::VectorXd& u) {
-  const long n = u.size();
-  Eigen::VectorXd y(n);
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(p.A.rows()), next(p.A.rows());
-  for (long k = 0; k < n; ++k) {
-    const double uk = k - p.delay >= 0 ? u(k - p.delay) : 0.0;
-    y(k) = p.C.dot(x) + p.D * uk;
-    next.noalias() = p.A * x;
-    next += p.B * uk;
-    x.swap(next);
-  }
-  return y;
-}
-
 double Sign(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0); }
-
-// Friction and cubic stiffness act in feedback: u_eff depends on the plant's own state.
-Eigen::VectorXd SimulateFeedback(const TransferFunction& plant, const Effect& effect,
-                                 const Eigen::VectorXd& u, double sample_time, int substeps) {
-  TransferFunction undelayed = plant;
-  undelayed.delay_s = 0.0;
-  const StateSpace c = ToStateSpace(undelayed);
-  const double h = sample_time / substeps;
-  const SampledPlant p = Sample(undelayed, h);
-  const long delay = std::lround(plant.delay_s / sample_time);
-  const Eigen::RowVectorXd ca = c.C.row(0) * c.A;
-  const double cb = (c.C.row(0) * c.B.col(0))(0, 0);
-  const double gain = effect.params[0];
-  const bool friction = effect.kind == EffectKind::kCoulombFriction;
-  const long n = u.size();
-  Eigen::VectorXd y(n);
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(p.A.rows()), next(p.A.rows());
-  for (long k = 0; k < n; ++k) {
-    const double uk = k - delay >= 0 ? u(k - delay) : 0.0;
-    for (int j = 0; j < substeps; ++j) {
-      double u_eff;
-      if (friction) {
-        const double velocity = ca.dot(x) + cb * uk;  // dy/dt from the continuous state
-        u_eff = uk - gain * Sign(velocity);
-      } else {
-        const double position = p.C.dot(x) + p.D * uk;
-        u_eff = uk - gain * position * position * position;
-      }
-      if (j == 0) y(k) = p.C.dot(x) + p.D * u_eff;
-      next.noalias() = p.A * x;
-      next += p.B * u_eff;
-      x.swap(next);
-    }
-    if (!std::isfinite(y(k))) {  // a diverging (e.g. softening) loop: stop, report as is
-      y.tail(n - k).setConstant(y(k));
-      break;
-    }
-  }
-  return y;
-}
 
 }  // namespace
 
@@ -230,47 +176,112 @@ double SensorMap(double y, const std::vector<double>& p) {
   return y * (p[0] + y * (p[1] + y * p[2]));
 }
 
-Eigen::VectorXd SimulateWithEffect(const TransferFunction& plant, const Effect& effect,
-                                   const Eigen::VectorXd& u, double sample_time,
-                                   const EffectSimulationOptions& options) {
+EffectSimulator::EffectSimulator(const TransferFunction& plant, const Effect& effect,
+                                 double sample_time, const EffectSimulationOptions& options)
+    : effect_(effect) {
   Validate(plant);
   ValidateEffect(effect);
   if (plant.IsDiscrete()) Fail("effect simulation needs a continuous plant");
   if (!(sample_time > 0.0)) Fail("effect simulation: sample time must be positive");
-  if (!u.allFinite()) Fail("effect simulation: input contains NaN or Inf");
   if (options.substeps < 1) Fail("effect simulation: substeps must be >= 1");
-  const auto& p = effect.params;
-  if (IsFeedbackEffect(effect.kind))
-    return SimulateFeedback(Normalized(plant), effect, u, sample_time, options.substeps);
-
-  const SampledPlant sampled = Sample(ApplyLinearEffect(plant, effect), sample_time);
-  Eigen::VectorXd input = u;
-  switch (effect.kind) {
-    case EffectKind::kInputSaturation:
-      input = u.cwiseMax(p[0]).cwiseMin(p[1]);
-      break;
-    case EffectKind::kDeadZone:
-      input = u.unaryExpr([&](double v) { return DeadZone(v, p[0]); });
-      break;
-    case EffectKind::kBacklash:
-      input = Backlash(u, p[0]);
-      break;
-    default:
-      break;
+  feedback_ = IsFeedbackEffect(effect.kind);
+  if (feedback_) {
+    // Friction and cubic stiffness act in feedback: u_eff depends on the plant's own state.
+    TransferFunction undelayed = Normalized(plant);
+    undelayed.delay_s = 0.0;
+    const StateSpace c = ToStateSpace(undelayed);
+    substeps_ = options.substeps;
+    const SampledPlant p = Sample(undelayed, sample_time / substeps_);
+    A_ = p.A;
+    B_ = p.B;
+    C_ = p.C;
+    D_ = p.D;
+    velocity_row_ = c.C.row(0) * c.A;
+    velocity_input_ = (c.C.row(0) * c.B.col(0))(0, 0);
+    delay_ = std::lround(plant.delay_s / sample_time);
+  } else {
+    const SampledPlant p = Sample(ApplyLinearEffect(plant, effect), sample_time);
+    A_ = p.A;
+    B_ = p.B;
+    C_ = p.C;
+    D_ = p.D;
+    delay_ = p.delay;
   }
-  Eigen::VectorXd y = SimulateLinear(sampled, input);
-  switch (effect.kind) {
-    case EffectKind::kOutputSaturation:
-      y = y.cwiseMax(p[0]).cwiseMin(p[1]);
+  Reset();
+}
+
+void EffectSimulator::Reset() {
+  x_ = Eigen::VectorXd::Zero(A_.rows());
+  next_ = Eigen::VectorXd::Zero(A_.rows());
+  delay_line_.assign(delay_, 0.0);
+  delay_head_ = 0;
+  backlash_ = 0.0;
+}
+
+double EffectSimulator::Step(double u) {
+  const auto& p = effect_.params;
+  // Input side: static maps and the play operator.
+  switch (effect_.kind) {
+    case EffectKind::kInputSaturation: u = std::clamp(u, p[0], p[1]); break;
+    case EffectKind::kDeadZone: u = DeadZone(u, p[0]); break;
+    case EffectKind::kBacklash:
+      backlash_ = std::max(u - p[0], std::min(u + p[0], backlash_));
+      u = backlash_;
       break;
-    case EffectKind::kSensorNonlinearity:
-      y = y.unaryExpr([&](double v) { return SensorMap(v, p); });
+    default: break;
+  }
+  // Whole-sample delay (a fractional part is in the sampled plant).
+  if (delay_ > 0) {
+    const double delayed = delay_line_[delay_head_];
+    delay_line_[delay_head_] = u;
+    delay_head_ = (delay_head_ + 1) % delay_;
+    u = delayed;
+  }
+  double y;
+  if (feedback_) {
+    const double gain = p[0];
+    y = 0.0;
+    for (int j = 0; j < substeps_; ++j) {
+      double u_eff;
+      if (effect_.kind == EffectKind::kCoulombFriction) {
+        const double velocity = velocity_row_.dot(x_) + velocity_input_ * u;  // dy/dt
+        u_eff = u - gain * Sign(velocity);
+      } else {
+        const double position = C_.dot(x_) + D_ * u;
+        u_eff = u - gain * position * position * position;
+      }
+      if (j == 0) y = C_.dot(x_) + D_ * u_eff;
+      next_.noalias() = A_ * x_;
+      next_ += B_ * u_eff;
+      x_.swap(next_);
+    }
+  } else {
+    y = C_.dot(x_) + D_ * u;
+    next_.noalias() = A_ * x_;
+    next_ += B_ * u;
+    x_.swap(next_);
+  }
+  // Output side.
+  switch (effect_.kind) {
+    case EffectKind::kOutputSaturation: return std::clamp(y, p[0], p[1]);
+    case EffectKind::kSensorNonlinearity: return SensorMap(y, p);
+    case EffectKind::kOutputQuantization: return p[0] * std::round(y / p[0]);
+    default: return y;
+  }
+}
+
+Eigen::VectorXd SimulateWithEffect(const TransferFunction& plant, const Effect& effect,
+                                   const Eigen::VectorXd& u, double sample_time,
+                                   const EffectSimulationOptions& options) {
+  if (!u.allFinite()) Fail("effect simulation: input contains NaN or Inf");
+  EffectSimulator simulator(plant, effect, sample_time, options);
+  Eigen::VectorXd y(u.size());
+  for (long k = 0; k < u.size(); ++k) {
+    y(k) = simulator.Step(u(k));
+    if (!std::isfinite(y(k))) {  // a diverging loop (e.g. softening stiffness): hold, stop
+      y.tail(u.size() - k).setConstant(y(k));
       break;
-    case EffectKind::kOutputQuantization:
-      y = y.unaryExpr([&](double v) { return p[0] * std::round(v / p[0]); });
-      break;
-    default:
-      break;
+    }
   }
   return y;
 }

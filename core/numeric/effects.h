@@ -74,6 +74,31 @@ struct EffectSimulationOptions {
   int substeps = 4;  // ZOH sub-steps per sample for the feedback effects
 };
 
+// Sample-by-sample simulation of the plant with the effect (the rig simulator's core): Step(u_k)
+// returns y_k and advances one sample. Starts at rest.
+class EffectSimulator {
+ public:
+  // Throws std::invalid_argument for a discrete plant, bad parameters or sample time.
+  EffectSimulator(const TransferFunction& plant, const Effect& effect, double sample_time,
+                  const EffectSimulationOptions& options = {});
+  double Step(double u);
+  void Reset();
+  const Effect& effect() const { return effect_; }
+
+ private:
+  Effect effect_;
+  bool feedback_ = false;
+  int substeps_ = 1;
+  Eigen::MatrixXd A_;
+  Eigen::VectorXd B_, x_, next_;
+  Eigen::RowVectorXd C_, velocity_row_;
+  double D_ = 0.0, velocity_input_ = 0.0;
+  long delay_ = 0;
+  std::vector<double> delay_line_;
+  long delay_head_ = 0;
+  double backlash_ = 0.0;
+};
+
 // Output of the plant with the effect for input samples u (Ts apart, plant at rest at k = 0).
 // `plant` must be continuous. Throws std::invalid_argument on bad sizes or parameters.
 Eigen::VectorXd SimulateWithEffect(const TransferFunction& plant, const Effect& effect,
