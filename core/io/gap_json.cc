@@ -1,6 +1,8 @@
 #include "core/io/gap_json.h"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <iomanip>
 #include <sstream>
 
@@ -28,6 +30,39 @@ nlohmann::json Params(const Effect& effect, const std::vector<double>* stds = nu
 
 nlohmann::json EffectToJson(const Effect& effect) {
   return {{"effect", EffectName(effect.kind)}, {"params", Params(effect)}};
+}
+
+Effect EffectFromJson(const nlohmann::json& json) {
+  if (!json.is_object() || !json.contains("effect") || !json["effect"].is_string())
+    throw std::invalid_argument("effect: expected {\"effect\": name, \"params\": {…}}");
+  Effect effect;
+  effect.kind = EffectFromName(json["effect"].get<std::string>());
+  const auto& names = EffectParameterNames(effect.kind);
+  const nlohmann::json params = json.value("params", nlohmann::json::object());
+  if (!params.is_object()) throw std::invalid_argument("effect: params must be an object");
+  for (auto it = params.begin(); it != params.end(); ++it)
+    if (std::find(names.begin(), names.end(), it.key()) == names.end())
+      throw std::invalid_argument("effect " + json["effect"].get<std::string>() + ": unknown parameter '" +
+                                  it.key() + "'");
+  for (const auto& name : names) {
+    if (!params.contains(name)) {
+      if (effect.kind == EffectKind::kSensorNonlinearity && name != "a1") {
+        effect.params.push_back(0.0);  // a2, a3, absolute default to 0
+        continue;
+      }
+      if (effect.kind == EffectKind::kSensorNonlinearity) {
+        effect.params.push_back(1.0);  // a1 defaults to 1
+        continue;
+      }
+      throw std::invalid_argument("effect " + json["effect"].get<std::string>() + ": missing parameter '" +
+                                  name + "'");
+    }
+    if (!params[name].is_number())
+      throw std::invalid_argument("effect: parameter '" + name + "' must be a number");
+    effect.params.push_back(params[name].get<double>());
+  }
+  ValidateEffect(effect);
+  return effect;
 }
 
 nlohmann::json GapReportToJson(const GapReport& report) {

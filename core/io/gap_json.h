@@ -8,7 +8,10 @@
 
 namespace idrig {
 
+// {"effect": name, "params": {name: value, …}}. EffectFromJson throws std::invalid_argument
+// naming an unknown effect, a missing or unknown parameter, or a bad value.
 nlohmann::json EffectToJson(const Effect& effect);
+Effect EffectFromJson(const nlohmann::json& json);
 nlohmann::json GapReportToJson(const GapReport& report);
 std::string GapReportText(const GapReport& report);
 // The same text from a stored report (idrig.gap/1 JSON, e.g. from the catalogue).

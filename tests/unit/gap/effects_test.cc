@@ -150,3 +150,33 @@ TEST(EffectsTest, BadEffectsAreRejectedWithTheirNames) {
 
 }  // namespace
 }  // namespace idrig
+
+#include "core/io/gap_json.h"
+
+namespace idrig {
+namespace {
+
+TEST(EffectJsonTest, RoundTripAndClearErrors) {
+  const Effect backlash{EffectKind::kBacklash, {0.25}};
+  const Effect back = EffectFromJson(EffectToJson(backlash));
+  EXPECT_EQ(back.kind, EffectKind::kBacklash);
+  EXPECT_EQ(back.params, backlash.params);
+  const Effect sensor = EffectFromJson({{"effect", "sensor_nonlinearity"}, {"params", {{"a3", 0.1}}}});
+  EXPECT_EQ(sensor.params, (std::vector<double>{1.0, 0.0, 0.1, 0.0}));
+  auto error = [](const nlohmann::json& j) {
+    try {
+      EffectFromJson(j);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error({{"effect", "dead_zone"}}).find("missing parameter 'd'"), std::string::npos);
+  EXPECT_NE(error({{"effect", "dead_zone"}, {"params", {{"width", 1}}}}).find("unknown parameter 'width'"),
+            std::string::npos);
+  EXPECT_NE(error({{"effect", "stiction"}}).find("unknown effect 'stiction'"), std::string::npos);
+  EXPECT_NE(error({{"effect", "dead_zone"}, {"params", {{"d", -1}}}}).find("d must be >= 0"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace idrig
