@@ -11,11 +11,13 @@ std::vector<MethodInfo> ArxMethods();
 std::vector<MethodInfo> FiniteFrequencyMethods();  // finite_frequency_method.cc
 std::vector<MethodInfo> StepModalMethods();        // step_modal_method.cc
 std::vector<MethodInfo> FrequencyMethods();        // frequency_method.cc
+std::vector<MethodInfo> GapMethods();              // gap_method.cc
 
 const std::vector<MethodInfo>& Methods() {
   static const std::vector<MethodInfo> methods = [] {
     std::vector<MethodInfo> all;
-    for (auto family : {ArxMethods, FiniteFrequencyMethods, StepModalMethods, FrequencyMethods}) {
+    for (auto family : {ArxMethods, FiniteFrequencyMethods, StepModalMethods, FrequencyMethods,
+                        GapMethods}) {
       auto some = family();
       all.insert(all.end(), some.begin(), some.end());
     }

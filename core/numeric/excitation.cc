@@ -97,9 +97,38 @@ double AnalyticValue(const ExcitationSpec& spec, const std::vector<MultisineLine
       }
       return spec.offset + spec.amplitude * std::sin(phase);
     }
+    case ExcitationKind::kDiagnose: {
+      const double period = spec.sweep_time;
+      const double tm = t - period * std::floor(t / period);
+      const double x = tm / period;  // position in the period, [0, 1)
+      double value;
+      if (x < 0.6) {
+        static const double kLevels[3] = {0.06, 0.15, 0.3};
+        const int block = std::min(2, static_cast<int>(x / 0.2));
+        const double base = 1.0 / (0.2 * period);
+        double sum = 0.0;
+        for (const MultisineLine& line : lines) {
+          const double cycles = line.harmonic * base * tm;
+          sum += line.amplitude * std::sin(kTwoPi * (cycles - std::floor(cycles)) + line.phase);
+        }
+        value = kLevels[block] * sum;
+      } else if (x < 0.8) {
+        const double phase = (x - 0.6) / 0.1;  // two triangle periods
+        const double f = phase - std::floor(phase);
+        value = 0.6 * (f < 0.25 ? 4 * f : (f < 0.75 ? 2 - 4 * f : 4 * f - 4));
+      } else {
+        static const double kSteps[4] = {0.5, -0.5, 1.0, -1.0};
+        value = kSteps[std::min(3, static_cast<int>((x - 0.8) / 0.05))];
+      }
+      return spec.offset + spec.amplitude * value;
+    }
     default:
       return 0.0;  // binary signals are stateful
   }
+}
+
+std::vector<MultisineLine> DiagnoseLines(const ExcitationSpec& spec) {
+  return MultisineLines(DiagnoseMultisine(spec));
 }
 
 }  // namespace
@@ -113,6 +142,7 @@ const char* ToString(ExcitationKind kind) {
     case ExcitationKind::kPrbs: return "prbs";
     case ExcitationKind::kRandomBinary: return "rbs";
     case ExcitationKind::kChirp: return "chirp";
+    case ExcitationKind::kDiagnose: return "diagnose";
   }
   return "?";
 }
@@ -282,6 +312,15 @@ void ValidateExcitation(const ExcitationSpec& spec, double sample_rate_hz) {
                   spec.start_frequency_hz != spec.end_frequency_hz,
               "chirp: a log sweep needs f0 != f1");
       break;
+    case ExcitationKind::kDiagnose:
+      Require(std::isfinite(spec.sweep_time) && spec.sweep_time > 0.0,
+              "diagnose: T=" + Num(spec.sweep_time) + " s must be positive");
+      Require(std::isfinite(spec.end_frequency_hz) && spec.end_frequency_hz >= 5.0 / spec.sweep_time,
+              "diagnose: f1=" + Num(spec.end_frequency_hz) +
+                  " Hz must be at least the multisine base 5/T=" + Num(5.0 / spec.sweep_time) + " Hz");
+      Require(spec.end_frequency_hz < nyquist, "diagnose: f1=" + Num(spec.end_frequency_hz) +
+                                                   " Hz is not below fs/2=" + Num(nyquist) + " Hz");
+      break;
   }
 }
 
@@ -289,17 +328,34 @@ double ExcitationPeriod(const ExcitationSpec& spec, double sample_rate_hz) {
   switch (spec.kind) {
     case ExcitationKind::kSine: return 1.0 / spec.frequency_hz;
     case ExcitationKind::kMultisine: return 1.0 / spec.base_frequency_hz;
-    case ExcitationKind::kChirp: return spec.sweep_time;
+    case ExcitationKind::kChirp:
+    case ExcitationKind::kDiagnose: return spec.sweep_time;
     case ExcitationKind::kPrbs:
       return (std::ldexp(1.0, spec.register_bits) - 1.0) / EffectiveClock(spec, sample_rate_hz);
     default: return 0.0;
   }
 }
 
+ExcitationSpec DiagnoseMultisine(const ExcitationSpec& diagnose) {
+  ExcitationSpec ms;
+  ms.kind = ExcitationKind::kMultisine;
+  ms.base_frequency_hz = 1.0 / (0.2 * diagnose.sweep_time);
+  const int top = std::max(1, static_cast<int>(std::floor(diagnose.end_frequency_hz / ms.base_frequency_hz + 1e-9)));
+  ms.lines.clear();
+  for (int n = 1; n <= top; ++n) ms.lines.push_back(n);
+  ms.line_set = MultisineLineSet::kOdd;
+  ms.phase_rule = MultisinePhase::kRandom;
+  ms.scale = MultisineScale::kRms;
+  ms.amplitude = 1.0;
+  ms.seed = diagnose.seed;
+  return ms;
+}
+
 ExcitationGenerator::ExcitationGenerator(const ExcitationSpec& spec, double sample_rate_hz)
     : spec_(spec), sample_rate_hz_(sample_rate_hz) {
   ValidateExcitation(spec_, sample_rate_hz_);
   if (spec_.kind == ExcitationKind::kMultisine) lines_ = MultisineLines(spec_);
+  if (spec_.kind == ExcitationKind::kDiagnose) lines_ = DiagnoseLines(spec_);
   if (spec_.kind == ExcitationKind::kPrbs) lfsr_mask_ = LfsrMask(spec_.register_bits);
   Reset();
 }
@@ -339,6 +395,7 @@ Eigen::VectorXd GenerateExcitation(const ExcitationSpec& spec, double sample_rat
   if (spec.kind != ExcitationKind::kPrbs && spec.kind != ExcitationKind::kRandomBinary) {
     std::vector<MultisineLine> lines;
     if (spec.kind == ExcitationKind::kMultisine) lines = MultisineLines(spec);
+    if (spec.kind == ExcitationKind::kDiagnose) lines = DiagnoseLines(spec);
     for (int64_t k = 0; k < num_samples; ++k) u[k] = AnalyticValue(spec, lines, k, sample_rate_hz);
     return u;
   }

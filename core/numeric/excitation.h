@@ -30,6 +30,7 @@ enum class ExcitationKind {
   kPrbs,          // offset ± amp, maximum-length LFSR sequence, period (2^bits − 1)/clock
   kRandomBinary,  // offset ± amp, one fair random bit per clock period
   kChirp,         // offset + amp·sin(φ(t mod T)), frequency swept f0 → f1 over T
+  kDiagnose,      // offset + the gap-diagnosis sequence over period T (see DiagnoseSegments)
 };
 
 // Which harmonics of the base frequency a multisine excites, among lines[].
@@ -76,7 +77,18 @@ struct ExcitationSpec {
   double end_frequency_hz = 1.0;    // f1
   double sweep_time = 10.0;         // T [s]: the sweep repeats with this period
   ChirpSweep sweep = ChirpSweep::kLinear;
+
+  // diagnose: period T = sweep_time [s], highest multisine line ≤ f1 = end_frequency_hz, seed
 };
+
+// The `diagnose` sequence, designed to separate the effects of the gap diagnosis (amplitude
+// dependence, detection lines, reversals, steps). Over each period T:
+//   [0, 0.6T)   three blocks of 0.2T: a random-phase odd multisine (base 1/(0.2T), odd lines up
+//               to f1; the even lines stay free), RMS 0.06, 0.15, 0.3 × amp (peaks ≈ amp);
+//   [0.6T, 0.8T) slow reversals: two triangle periods of peak 0.6 amp;
+//   [0.8T, T)   steps: +0.5, −0.5, +1, −1 × amp, 0.05T each.
+// The multisine of one block (unit RMS), for analysis of the detection lines.
+ExcitationSpec DiagnoseMultisine(const ExcitationSpec& diagnose);
 
 // Parses a SPEC string (grammar in docs/excitation.md). Throws std::invalid_argument naming the
 // bad kind, key or value and listing what is allowed.

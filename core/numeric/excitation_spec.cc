@@ -131,11 +131,11 @@ ExcitationSpec ParseExcitationSpec(const std::string& raw) {
       {"step", ExcitationKind::kStep},       {"exp", ExcitationKind::kExponential},
       {"sine", ExcitationKind::kSine},       {"multisine", ExcitationKind::kMultisine},
       {"prbs", ExcitationKind::kPrbs},       {"rbs", ExcitationKind::kRandomBinary},
-      {"chirp", ExcitationKind::kChirp}};
+      {"chirp", ExcitationKind::kChirp},     {"diagnose", ExcitationKind::kDiagnose}};
   const auto found = kKinds.find(kind);
   if (found == kKinds.end())
     Fail(text, "unknown signal kind '" + kind +
-                   "'; use one of step, exp, sine, multisine, prbs, rbs, chirp");
+                   "'; use one of step, exp, sine, multisine, prbs, rbs, chirp, diagnose");
   spec.kind = found->second;
   std::set<std::string> allowed = {"amp", "offset"};
   switch (spec.kind) {
@@ -148,6 +148,11 @@ ExcitationSpec ParseExcitationSpec(const std::string& raw) {
     case ExcitationKind::kPrbs: allowed.insert({"bits", "fc"}); break;
     case ExcitationKind::kRandomBinary: allowed.insert({"fc", "seed"}); break;
     case ExcitationKind::kChirp: allowed.insert({"f0", "f1", "T", "sweep"}); break;
+    case ExcitationKind::kDiagnose:
+      allowed.insert({"T", "f1", "seed"});
+      spec.sweep_time = 60.0;
+      spec.end_frequency_hz = 1.0;
+      break;
   }
   std::set<std::string> seen;
   if (colon != std::string::npos) {
@@ -168,7 +173,9 @@ ExcitationSpec ParseExcitationSpec(const std::string& raw) {
       } else if (key == "at") {
         spec.start_time = ParseReal(text, key, value);
       } else if (key == "T") {
-        (spec.kind == ExcitationKind::kChirp ? spec.sweep_time : spec.time_constant) =
+        (spec.kind == ExcitationKind::kChirp || spec.kind == ExcitationKind::kDiagnose
+             ? spec.sweep_time
+             : spec.time_constant) =
             ParseReal(text, key, value);
       } else if (key == "f") {
         spec.frequency_hz = ParseReal(text, key, value);
@@ -274,6 +281,10 @@ std::string FormatExcitationSpec(const ExcitationSpec& spec) {
       out += ",f0=" + Num(spec.start_frequency_hz) + ",f1=" + Num(spec.end_frequency_hz) +
              ",T=" + Num(spec.sweep_time) +
              (spec.sweep == ChirpSweep::kLinear ? ",sweep=linear" : ",sweep=log");
+      break;
+    case ExcitationKind::kDiagnose:
+      out += ",T=" + Num(spec.sweep_time) + ",f1=" + Num(spec.end_frequency_hz) +
+             ",seed=" + std::to_string(spec.seed);
       break;
   }
   return out;

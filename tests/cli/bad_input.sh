@@ -1,19 +1,6 @@
 #!/usr/bin/env bash
 # Each bad input gives exit code 2 and a message naming the problem.
-set -uo pipefail
-idrig=$1
-dir=$(mktemp -d); trap 'rm -rf "$dir"' EXIT
-status=0
-expect() {  # expect "fragment" command...
-  local fragment=$1; shift
-  local out rc
-  out=$("$@" 2>&1); rc=$?
-  if [ $rc -ne 2 ] || ! grep -qF -- "$fragment" <<<"$out"; then
-    echo "FAIL ($rc): $* -> $out (expected '$fragment')"; status=1
-  else
-    echo "ok: $fragment"
-  fi
-}
+source "$(dirname "$0")/lib/common.bash"
 printf 't,u,y\n0,1,0\n0.1,nan,0\n0.2,1,0\n' > "$dir/nan.csv"
 printf 't,u,y\n0,1,0\n0.1,1,0\n0.1,1,0\n' > "$dir/time.csv"
 printf 't,x,y\n0,1,0\n0.1,1,0\n' > "$dir/cols.csv"

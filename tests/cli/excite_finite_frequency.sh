@@ -3,21 +3,7 @@
 # over-limit amplitude with exit status 2; and idrig identify --method finite-frequency
 # --frequencies … --json identifies plant (40) of [Aleksandrov] from a record made by
 # idrig excite + idrig simulate.
-set -uo pipefail
-idrig=$1
-dir=$(mktemp -d); trap 'rm -rf "$dir"' EXIT
-status=0
-fail() { echo "FAIL: $*"; status=1; }
-expect() {  # expect "fragment" command...: exit status 2 and a message naming the problem
-  local fragment=$1; shift
-  local out rc
-  out=$("$@" 2>&1); rc=$?
-  if [ $rc -ne 2 ] || ! grep -qF -- "$fragment" <<<"$out"; then
-    fail "($rc): $* -> $out (expected '$fragment')"
-  else
-    echo "ok: $fragment"
-  fi
-}
+source "$(dirname "$0")/lib/common.bash"
 
 # --- PRBS: 5-bit maximum-length sequence, 2 periods of 31 samples at fs = 100 Hz.
 "$idrig" excite --signal prbs:bits=5,amp=1 --fs 100 --duration 0.62 --out "$dir/prbs.csv" \

@@ -11,4 +11,5 @@ void RegisterExciteCommand(CLI::App& app);  // cmd_excite.cc
 // `idrig demo` can re-run itself inside a network namespace.
 void RegisterServiceCommands(CLI::App& app);
 void SetCommandLine(int argc, char** argv);
+void RegisterGapCommand(CLI::App& app);     // cmd_gap.cc
 }  // namespace idrig

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   idrig::RegisterExciteCommand(app);
   idrig::RegisterServiceCommands(app);
   idrig::SetCommandLine(argc, argv);
+  idrig::RegisterGapCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,185 @@
+#include "core/io/gap_json.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <iomanip>
+#include <sstream>
+
+#include "core/io/model_json.h"
+
+namespace idrig {
+namespace {
+
+nlohmann::json Number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+nlohmann::json Params(const Effect& effect, const std::vector<double>* stds = nullptr) {
+  nlohmann::json p = nlohmann::json::object();
+  const auto& names = EffectParameterNames(effect.kind);
+  for (size_t i = 0; i < names.size() && i < effect.params.size(); ++i) {
+    if (stds && i < stds->size()) {
+      p[names[i]] = {{"value", Number(effect.params[i])}, {"std", Number((*stds)[i])}};
+    } else {
+      p[names[i]] = Number(effect.params[i]);
+    }
+  }
+  return p;
+}
+
+}  // namespace
+
+nlohmann::json EffectToJson(const Effect& effect) {
+  return {{"effect", EffectName(effect.kind)}, {"params", Params(effect)}};
+}
+
+Effect EffectFromJson(const nlohmann::json& json) {
+  if (!json.is_object() || !json.contains("effect") || !json["effect"].is_string())
+    throw std::invalid_argument("effect: expected {\"effect\": name, \"params\": {…}}");
+  Effect effect;
+  effect.kind = EffectFromName(json["effect"].get<std::string>());
+  const auto& names = EffectParameterNames(effect.kind);
+  const nlohmann::json params = json.value("params", nlohmann::json::object());
+  if (!params.is_object()) throw std::invalid_argument("effect: params must be an object");
+  for (auto it = params.begin(); it != params.end(); ++it)
+    if (std::find(names.begin(), names.end(), it.key()) == names.end())
+      throw std::invalid_argument("effect " + json["effect"].get<std::string>() + ": unknown parameter '" +
+                                  it.key() + "'");
+  for (const auto& name : names) {
+    if (!params.contains(name)) {
+      if (effect.kind == EffectKind::kSensorNonlinearity && name != "a1") {
+        effect.params.push_back(0.0);  // a2, a3, absolute default to 0
+        continue;
+      }
+      if (effect.kind == EffectKind::kSensorNonlinearity) {
+        effect.params.push_back(1.0);  // a1 defaults to 1
+        continue;
+      }
+      throw std::invalid_argument("effect " + json["effect"].get<std::string>() + ": missing parameter '" +
+                                  name + "'");
+    }
+    if (!params[name].is_number())
+      throw std::invalid_argument("effect: parameter '" + name + "' must be a number");
+    effect.params.push_back(params[name].get<double>());
+  }
+  ValidateEffect(effect);
+  return effect;
+}
+
+nlohmann::json GapReportToJson(const GapReport& report) {
+  const GapVerdict& v = report.verdict;
+  nlohmann::json verdict = {
+      {"effect", v.effect},
+      {"confidence", v.confidence},
+      {"nrmse_before", v.nrmse_before},
+      {"nrmse_after", v.nrmse_after},
+      {"shrink", v.shrink},
+      {"effect_fitted", EffectName(v.params.kind)},
+      {"params", Params(v.params)},
+      {"params_std", Params(Effect{v.params.kind, v.param_std})},
+      {"plant", ModelToJson(v.plant)},
+      {"explanation", v.explanation},
+  };
+  if (!v.tied.empty()) verdict["tied"] = v.tied;
+
+  nlohmann::json ranking = nlohmann::json::array();
+  for (const auto& c : report.ranking) {
+    ranking.push_back({
+        {"effect", EffectName(c.effect.kind)},
+        {"nrmse_after", c.nrmse_after},
+        {"score", c.score},
+        {"bic", c.bic},
+        {"eligible", c.eligible},
+        {"likelihood_ratio", c.likelihood_ratio},
+        {"lr_threshold", c.lr_threshold},
+        {"significant", c.significant},
+        {"signature", c.signature},
+        {"estimation_mse", c.estimation_mse},
+        {"validation_mse", c.validation_mse},
+        {"parameters", c.parameters},
+        {"params", Params(c.effect, &c.param_std)},
+        {"plant", ModelToJson(c.plant)},
+        {"evaluations", c.evaluations},
+        {"note", c.note},
+    });
+  }
+
+  const GapWhere& w = report.where;
+  nlohmann::json bands = nlohmann::json::array();
+  for (const auto& b : w.bands)
+    bands.push_back({{"f_lo_hz", b.f_lo_hz}, {"f_hi_hz", b.f_hi_hz}, {"gap_power", b.gap_power},
+                     {"coherence", b.coherence}, {"coherence_threshold", b.coherence_threshold},
+                     {"relative_error", b.relative_error},
+                     {"significant", b.significant}});
+  nlohmann::json factors = nlohmann::json::object();
+  for (const auto& f : w.factors) {
+    nlohmann::json bins = nlohmann::json::array();
+    for (const auto& b : f.bins)
+      bins.push_back({{"label", b.label}, {"samples", b.samples}, {"mean", b.mean}, {"rms", b.rms},
+                      {"relative_rms", b.relative_rms}});
+    factors[f.name] = {{"eta_squared", f.eta_squared}, {"rms_ratio", f.rms_ratio},
+                       {"relative_ratio", f.relative_ratio}, {"bins", bins}};
+  }
+  nlohmann::json where = {
+      {"nrmse_before", w.nrmse_before},
+      {"noise_nrmse", w.noise_nrmse},
+      {"gap_to_noise", w.gap_to_noise},
+      {"gap_significant", w.gap_significant},
+      {"residual_white", w.residual_white},
+      {"residual_independent", w.residual_independent},
+      {"bands", bands},
+      {"factors", factors},
+      {"summary", w.summary},
+  };
+  return {{"format", "idrig.gap/1"},
+          {"verdict", verdict},
+          {"ranking", ranking},
+          {"where", where},
+          {"notes", report.notes},
+          {"estimation_samples", report.estimation_samples},
+          {"validation_samples", report.validation_samples}};
+}
+
+std::string GapReportText(const nlohmann::json& report) {
+  std::ostringstream s;
+  const auto& v = report.at("verdict");
+  s << std::setprecision(4);
+  s << "verdict: " << v.at("effect").get<std::string>();
+  if (v.contains("tied")) {
+    std::string tied;
+    for (const auto& t : v["tied"]) tied += (tied.empty() ? "" : " or ") + t.get<std::string>();
+    s << " (" << tied << ")";
+  }
+  s << "  confidence " << v.at("confidence").get<double>() << "\n";
+  s << "  " << v.at("explanation").get<std::string>() << "\n";
+  s << "  validation NRMSE before " << v.at("nrmse_before").get<double>() << ", after "
+    << v.at("nrmse_after").get<double>() << ", noise floor "
+    << report.at("where").at("noise_nrmse").get<double>() << "\n";
+  for (const auto& [name, value] : v.at("params").items()) {
+    s << "  " << name << " = " << value;
+    const auto& sd = v.at("params_std")[name];
+    if (sd.is_number()) s << " ± " << sd.get<double>();
+    s << "\n";
+  }
+  s << "where: " << report.at("where").at("summary").get<std::string>() << "\n";
+  s << "ranking (validation BIC; eligible = significant on estimation data and matching the gap):\n";
+  s << "  " << std::left << std::setw(22) << "effect" << std::setw(12) << "NRMSE" << std::setw(12)
+    << "score" << std::setw(10) << "LR/thr" << "signature\n";
+  for (const auto& c : report.at("ranking")) {
+    std::ostringstream lr, score, nrmse, signature;
+    lr << std::setprecision(3)
+       << c.at("likelihood_ratio").get<double>() / std::max(c.at("lr_threshold").get<double>(), 1e-12);
+    score << std::setprecision(3) << c.at("score").get<double>();
+    nrmse << std::setprecision(4) << c.at("nrmse_after").get<double>();
+    signature << std::setprecision(3) << c.at("signature").get<double>();
+    const std::string name = c.at("effect").get<std::string>();
+    s << "  " << std::left << std::setw(22) << name << std::setw(12) << nrmse.str() << std::setw(12)
+      << score.str() << std::setw(10) << (name == "none" ? "-" : lr.str()) << signature.str()
+      << (c.at("eligible").get<bool>() ? "" : "  (not eligible)") << "\n";
+  }
+  for (const auto& n : report.at("notes")) s << "note: " << n.get<std::string>() << "\n";
+  return s.str();
+}
+
+std::string GapReportText(const GapReport& report) { return GapReportText(GapReportToJson(report)); }
+
+}  // namespace idrig

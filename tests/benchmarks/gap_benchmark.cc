@@ -1,0 +1,46 @@
+// One gap diagnosis of a 10^4-sample estimation record (and a 10^4-sample validation record)
+// against all 13 candidates, for a few withheld effects; threads = 1 and 2 (candidates in
+// parallel). Goal (issue 7): ≤ 10 s on the 2-core machine.
+//   build/bin/gap_benchmark --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+
+#include <random>
+
+#include "core/numeric/gap_bench.h"
+#include "core/numeric/gap_diagnosis.h"
+
+namespace {
+
+void BM_Diagnose(benchmark::State& state) {
+  const auto effect = static_cast<idrig::EffectKind>(state.range(0));
+  std::mt19937_64 rng(100 + state.range(0));
+  idrig::GapCaseOptions options;
+  options.samples = static_cast<int>(state.range(2));
+  options.excitation = "levels";
+  const idrig::GapCase c = idrig::MakeGapCase(effect, rng, options);
+  idrig::GapOptions gap;
+  gap.threads = static_cast<int>(state.range(1));
+  std::string verdict;
+  for (auto _ : state) {
+    const idrig::GapReport report = idrig::DiagnoseGap(c.sim, {c.estimation}, {c.validation}, gap);
+    verdict = report.verdict.effect;
+  }
+  state.SetLabel(std::string(idrig::EffectName(effect)) + " -> " + verdict);
+  state.counters["samples"] = options.samples;
+  state.counters["threads"] = gap.threads;
+}
+
+BENCHMARK(BM_Diagnose)
+    ->ArgsProduct({{static_cast<long>(idrig::EffectKind::kNone),
+                    static_cast<long>(idrig::EffectKind::kTimeDelay),
+                    static_cast<long>(idrig::EffectKind::kBacklash),
+                    static_cast<long>(idrig::EffectKind::kCoulombFriction),
+                    static_cast<long>(idrig::EffectKind::kOutputQuantization)},
+                   {1, 2},
+                   {10000}})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
+
+}  // namespace
+
+BENCHMARK_MAIN();

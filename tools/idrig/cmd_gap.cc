@@ -1,0 +1,248 @@
+// idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--json]
+// idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--jobs J] [--json]
+#include <atomic>
+#include <chrono>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "core/io/csv.h"
+#include "core/io/gap_json.h"
+#include "core/io/gap_svg.h"
+#include "core/io/model_json.h"
+#include "core/numeric/gap_bench.h"
+#include "core/numeric/gap_diagnosis.h"
+#include "tools/idrig/commands.h"
+
+namespace idrig {
+namespace {
+
+GapRecord LoadRecord(const std::string& path) {
+  const IoRecord record = ReadIoRecordCsv(path);
+  if (record.NumInputs() != 1 || record.NumOutputs() != 1)
+    throw std::invalid_argument(path + ": the gap diagnosis takes SISO records (t,u,y); this one has " +
+                                std::to_string(record.NumInputs()) + " inputs and " +
+                                std::to_string(record.NumOutputs()) + " outputs");
+  GapRecord r;
+  r.u = record.u.col(0);
+  r.y = record.y.col(0);
+  r.sample_time = record.sample_time;
+  return r;
+}
+
+TransferFunction LoadSimModel(const std::string& path) {
+  const LtiModel model = ReadModelFile(path);
+  if (const auto* tf = std::get_if<TransferFunction>(&model)) return *tf;
+  const StateSpace& ss = std::get<StateSpace>(model);
+  if (ss.NumInputs() != 1 || ss.NumOutputs() != 1)
+    throw std::invalid_argument(path + ": the sim model must be SISO for the gap diagnosis");
+  TransferFunction tf = ToTransferFunction(ss);
+  tf.delay_s = ss.delay_s;
+  return tf;
+}
+
+struct BenchOutcome {
+  EffectKind truth;
+  std::string verdict;
+  double shrink = 0, confidence = 0, seconds = 0;
+  std::string excitation;
+};
+
+void WriteCase(const GapCase& c, const std::string& dir, int index) {
+  const std::string base = dir + "/case" + std::to_string(index);
+  WriteModelFile(LtiModel(c.sim), base + "-sim.json");
+  WriteIoRecordCsv(MakeIoRecord(c.estimation.u, c.estimation.y, c.estimation.sample_time), base + "-est.csv");
+  WriteIoRecordCsv(MakeIoRecord(c.validation.u, c.validation.y, c.validation.sample_time), base + "-val.csv");
+  nlohmann::json truth = EffectToJson(c.effect);
+  truth["effect"] = EffectName(c.truth);
+  truth["real"] = ModelToJson(c.real);
+  truth["noise_sigma"] = c.noise_sigma;
+  truth["excitation"] = c.excitation;
+  std::ofstream(base + "-truth.json") << truth.dump(2) << "\n";
+}
+
+void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bool json,
+              const std::string& dump_dir, const std::string& excitation) {
+  const auto& kinds = AllEffects();
+  std::vector<BenchOutcome> outcomes(cases);
+  std::atomic<int> next{0};
+  std::mutex print;
+  auto worker = [&] {
+    for (int i = next++; i < cases; i = next++) {
+      // Each case has its own generator: the result does not depend on the thread schedule.
+      std::mt19937_64 rng(seed * 1000003ULL + static_cast<uint64_t>(i));
+      const EffectKind truth = kinds[i % kinds.size()];
+      GapCaseOptions options;
+      options.snr_db = snr_db;
+      options.samples = samples;
+      options.excitation = excitation;
+      const GapCase c = MakeGapCase(truth, rng, options);
+      if (!dump_dir.empty()) WriteCase(c, dump_dir, i);
+      const auto start = std::chrono::steady_clock::now();
+      GapOptions diagnosis;
+      diagnosis.threads = 1;  // the cases run in parallel instead
+      const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, diagnosis);
+      BenchOutcome& o = outcomes[i];
+      o.truth = truth;
+      o.verdict = report.verdict.effect;
+      o.shrink = report.verdict.shrink;
+      o.confidence = report.verdict.confidence;
+      o.excitation = c.excitation;
+      o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::lock_guard<std::mutex> lock(print);
+      std::cerr << "case " << i << ": truth " << EffectName(truth) << " (" << c.excitation
+                << "), verdict " << o.verdict << ", confidence " << std::setprecision(3)
+                << o.confidence << ", shrink " << o.shrink << ", " << o.seconds << " s\n";
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 0; j < std::max(1, jobs); ++j) threads.emplace_back(worker);
+  for (auto& t : threads) t.join();
+
+  std::map<std::string, std::map<std::string, int>> confusion;
+  std::map<std::string, std::pair<int, int>> by_excitation;  // correct, total
+  int correct = 0, none_cases = 0, false_alarms = 0;
+  std::vector<double> shrinks;
+  double total_seconds = 0;
+  for (const auto& o : outcomes) {
+    const std::string truth = EffectName(o.truth);
+    ++confusion[truth][o.verdict];
+    total_seconds += o.seconds;
+    ++by_excitation[o.excitation].second;
+    if (o.verdict == truth) {
+      ++by_excitation[o.excitation].first;
+      ++correct;
+      if (o.truth != EffectKind::kNone) shrinks.push_back(o.shrink);
+    }
+    if (o.truth == EffectKind::kNone) {
+      ++none_cases;
+      if (o.verdict != "none") ++false_alarms;
+    }
+  }
+  std::sort(shrinks.begin(), shrinks.end());
+  const double median_shrink = shrinks.empty() ? 0.0 : shrinks[shrinks.size() / 2];
+  const double accuracy = cases ? double(correct) / cases : 0.0;
+  const double false_alarm_rate = none_cases ? double(false_alarms) / none_cases : 0.0;
+  if (json) {
+    nlohmann::json out = {{"cases", cases}, {"seed", seed}, {"snr_db", snr_db}, {"samples", samples},
+                          {"top1_accuracy", accuracy}, {"false_alarm_rate", false_alarm_rate},
+                          {"median_shrink_correct", median_shrink},
+                          {"mean_seconds", cases ? total_seconds / cases : 0.0},
+                          {"confusion", confusion}};
+    for (const auto& [kind, counts] : by_excitation)
+      out["top1_by_excitation"][kind] = double(counts.first) / counts.second;
+    std::cout << out.dump(2) << "\n";
+    return;
+  }
+  std::cout << std::setprecision(3) << "cases " << cases << ", seed " << seed << ", SNR " << snr_db
+            << " dB, " << samples << " samples per record\n"
+            << "top-1 accuracy " << accuracy << " (" << correct << "/" << cases << ")\n"
+            << "false alarms on none " << false_alarm_rate << " (" << false_alarms << "/" << none_cases
+            << ")\n"
+            << "median validated shrink (right effect) " << median_shrink << "\n"
+            << "mean time per diagnosis " << (cases ? total_seconds / cases : 0.0) << " s\n";
+  for (const auto& [kind, counts] : by_excitation)
+    std::cout << "top-1 on " << kind << " excitation " << double(counts.first) / counts.second << " ("
+              << counts.first << "/" << counts.second << ")\n";
+  std::cout
+            << "confusion (rows: truth; columns: verdicts with counts)\n";
+  for (const auto& [truth, row] : confusion) {
+    std::cout << "  " << std::left << std::setw(22) << truth;
+    for (const auto& [verdict, count] : row) std::cout << " " << verdict << ":" << count;
+    std::cout << "\n";
+  }
+}
+
+}  // namespace
+
+void RegisterGapCommand(CLI::App& app) {
+  auto* gap = app.add_subcommand("gap", "sim-to-real gap diagnosis");
+  gap->require_subcommand(1);
+
+  struct DiagnoseArgs {
+    std::string sim;
+    std::vector<std::string> data, validate;
+    std::string plots;
+    bool json = false;
+  };
+  auto d = std::make_shared<DiagnoseArgs>();
+  auto* diagnose = gap->add_subcommand(
+      "diagnose", "where the sim model departs from the records, which effect causes it, and how far adding it closes the gap on validation data");
+  diagnose->add_option("--sim", d->sim, "sim model (idrig.model/1 JSON, SISO)")->required();
+  diagnose->add_option("--data", d->data, "estimation record CSV t,u,y (repeatable)")->required();
+  diagnose->add_option("--validate", d->validate, "held-out validation record CSV (repeatable); "
+                                                  "absent: one record is split in time");
+  diagnose->add_flag("--json", d->json, "print the report as JSON (idrig.gap/1)");
+  diagnose->add_option("--plots", d->plots, "also write SVG plots of the gap (frequency, amplitude, state, time, ranking) into this directory");
+  diagnose->callback([d] {
+    const TransferFunction sim = LoadSimModel(d->sim);
+    std::vector<GapRecord> estimation, validation;
+    for (const auto& p : d->data) estimation.push_back(LoadRecord(p));
+    for (const auto& p : d->validate) validation.push_back(LoadRecord(p));
+    const GapReport report = DiagnoseGap(sim, estimation, validation);
+    nlohmann::json out = GapReportToJson(report);
+    out["sim"] = d->sim;
+    out["data"] = d->data;
+    out["validate"] = d->validate;
+    if (d->json) std::cout << out.dump(2) << "\n";
+    else std::cout << GapReportText(out);
+    if (!d->plots.empty())
+      for (const auto& path : WriteGapReportSvgs(out, d->plots)) std::cerr << "wrote " << path << "\n";
+  });
+
+  struct ReportArgs {
+    std::string source, plots;
+  };
+  auto r = std::make_shared<ReportArgs>();
+  auto* report_cmd = gap->add_subcommand(
+      "report", "render a stored diagnosis report (idrig.gap/1 JSON file) as text, with SVG plots");
+  report_cmd->add_option("report", r->source, "report file written by `gap diagnose --json`")->required();
+  report_cmd->add_option("--plots", r->plots, "write SVG plots into this directory");
+  report_cmd->callback([r] {
+    std::ifstream file(r->source);
+    if (!file) throw std::invalid_argument("cannot open report '" + r->source + "'");
+    nlohmann::json report;
+    try {
+      report = nlohmann::json::parse(file);
+    } catch (const nlohmann::json::parse_error& e) {
+      throw std::invalid_argument(r->source + ": not valid JSON: " + e.what());
+    }
+    if (report.value("format", "") != "idrig.gap/1")
+      throw std::invalid_argument(r->source + ": not a gap report (format is not idrig.gap/1)");
+    std::cout << GapReportText(report);
+    if (!r->plots.empty())
+      for (const auto& path : WriteGapReportSvgs(report, r->plots)) std::cout << "plot: " << path << "\n";
+  });
+
+  struct BenchArgs {
+    int cases = 26, samples = 4000, jobs = 2;
+    uint64_t seed = 1;
+    double snr = 30;
+    bool json = false;
+    std::string dump, excitation;
+  };
+  auto b = std::make_shared<BenchArgs>();
+  auto* bench = gap->add_subcommand(
+      "bench", "blind check: generate cases with a withheld effect, diagnose them, score the verdicts");
+  bench->add_option("--cases", b->cases, "number of cases (the 13 effects in turn)")->check(CLI::PositiveNumber);
+  bench->add_option("--seed", b->seed, "seed of the case generator");
+  bench->add_option("--snr", b->snr, "output SNR in dB");
+  bench->add_option("--samples", b->samples, "samples per record")->check(CLI::Range(200, 10000000));
+  bench->add_option("--jobs", b->jobs, "parallel diagnoses")->check(CLI::Range(1, 64));
+  bench->add_flag("--json", b->json, "print the summary as JSON");
+  bench->add_option("--dump", b->dump, "also write each case (sim model, records, truth) to this directory");
+  bench->add_option("--excitation", b->excitation, "levels, prbs or rbs for every case (default: drawn per case)")
+      ->check(CLI::IsMember({"levels", "prbs", "rbs"}));
+  bench->callback([b] {
+    RunBench(b->cases, b->seed, b->snr, b->samples, b->jobs, b->json, b->dump, b->excitation);
+  });
+}
+
+}  // namespace idrig
