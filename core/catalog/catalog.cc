@@ -395,6 +395,41 @@ std::pair<int64_t, bool> Catalog::StoreDiagnosis(int64_t request_id, const std::
   return {id, true};
 }
 
+namespace {
+constexpr const char* kDiagnosisSelect =
+    "SELECT report_id, request_id, rig_id, coalesce(model_id, 0), experiment_id, created_utime, "
+    "report_json FROM diagnosis_reports ";
+DiagnosisRecord ReadDiagnosis(const SqliteStatement& s) {
+  DiagnosisRecord d;
+  d.report_id = s.Int(0);
+  d.request_id = s.Int(1);
+  d.rig_id = s.Text(2);
+  d.model_id = s.Int(3);
+  d.experiment_id = s.Int(4);
+  d.created_utime = s.Int(5);
+  d.report_json = s.Text(6);
+  return d;
+}
+}  // namespace
+
+std::optional<DiagnosisRecord> Catalog::Diagnosis(int64_t report_id) {
+  const std::string sql = std::string(kDiagnosisSelect) + "WHERE report_id = ?1";
+  SqliteStatement s(db_, sql.c_str());
+  s.Bind(1, report_id);
+  if (!s.Step()) return std::nullopt;
+  return ReadDiagnosis(s);
+}
+
+std::vector<DiagnosisRecord> Catalog::Diagnoses(const std::string& rig_id, int limit) {
+  const std::string sql = std::string(kDiagnosisSelect) +
+                          "WHERE (?1 = '' OR rig_id = ?1) ORDER BY report_id DESC LIMIT ?2";
+  SqliteStatement s(db_, sql.c_str());
+  s.Bind(1, rig_id).Bind(2, static_cast<int64_t>(limit));
+  std::vector<DiagnosisRecord> out;
+  while (s.Step()) out.push_back(ReadDiagnosis(s));
+  return out;
+}
+
 int64_t Catalog::CountModels() {
   SqliteStatement s(db_, "SELECT count(*) FROM models");
   s.Step();

@@ -55,6 +55,12 @@ struct ModelRecord {
   std::string signal_spec;  // from the experiment (read side only)
 };
 
+// A stored gap-diagnosis report (idrig.gap/1 JSON) with its lineage.
+struct DiagnosisRecord {
+  int64_t report_id = 0, request_id = 0, model_id = 0, experiment_id = 0, created_utime = 0;
+  std::string rig_id, report_json;
+};
+
 struct Metric {
   std::string name;
   double value = 0.0;
@@ -110,6 +116,9 @@ class Catalog {
   std::pair<int64_t, bool> StoreDiagnosis(int64_t request_id, const std::string& rig_id,
                                           int64_t model_id, int64_t experiment_id,
                                           const std::string& report_json, int64_t utime);
+  std::optional<DiagnosisRecord> Diagnosis(int64_t report_id);
+  // Newest first; every rig when rig_id is empty.
+  std::vector<DiagnosisRecord> Diagnoses(const std::string& rig_id = "", int limit = 1000);
   int64_t CountModels();
   // "ok" when PRAGMA integrity_check passes, else its first message.
   std::string IntegrityCheck();

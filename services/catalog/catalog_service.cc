@@ -124,6 +124,11 @@ void CatalogService::OnResult(const uint8_t* data, size_t size) {
     m.model_json = report["model"].dump();
     m.report_json = result.report_json;
     const auto [model_id, inserted] = catalog_.StoreModel(m, ModelMetrics(report));
+    // A gap diagnosis (method gap-diagnose) also goes to the diagnosis reports, with its lineage.
+    if (report.contains("details") && report["details"].is_object() &&
+        report["details"].value("format", "") == "idrig.gap/1")
+      catalog_.StoreDiagnosis(m.request_id, m.rig_id, model_id, m.experiment_id,
+                              report["details"].dump(), m.created_utime);
     ack.model_id = model_id;
     ack.duplicate = !inserted;
     inserted ? ++stored_ : ++duplicates_;

@@ -4,6 +4,7 @@
 #include <idrig/replay_request_t.hpp>
 #include <set>
 
+#include "core/io/gap_json.h"
 #include "core/io/model_json.h"
 #include "core/transport/channels.h"
 #include "core/transport/service_util.h"
@@ -29,6 +30,7 @@ RigSimConfig RigSimConfig::FromJson(const nlohmann::json& c) {
   config.block_samples = ConfigValue<int>(c, "block_samples", config.block_samples);
   config.keep_experiments = ConfigValue<int>(c, "keep_experiments", config.keep_experiments);
   config.status_period_s = ConfigValue<double>(c, "status_period_s", config.status_period_s);
+  if (c.contains("effect")) config.effect = EffectFromJson(c["effect"]);
   const std::string key_file = ConfigValue<std::string>(c, "key_file", "");
   if (!key_file.empty()) config.keys[ConfigValue<int32_t>(c, "key_id", 1)] = ReadKeyFile(key_file);
   return config;
@@ -46,6 +48,14 @@ RigSim::RigSim(Transport& transport, RigSimConfig config)
   const StateSpace ss = ToStateSpace(config_.plant);
   if (ss.NumInputs() != 1 || ss.NumOutputs() != 1)
     throw std::invalid_argument("idrig-rig-sim simulates SISO plants only");
+  if (config_.effect.kind != EffectKind::kNone &&
+      !(std::holds_alternative<TransferFunction>(config_.plant) &&
+        !std::get<TransferFunction>(config_.plant).IsDiscrete()))
+    throw std::invalid_argument("idrig-rig-sim: an effect needs a continuous transfer-function plant");
+  if (config_.effect.kind == EffectKind::kParameterMismatch)
+    throw std::invalid_argument("idrig-rig-sim: parameter_mismatch is a different plant, not an effect: "
+                                "change the model instead");
+  ValidateEffect(config_.effect);
   if (config_.block_samples < 1 || config_.block_samples > 3000)
     throw std::invalid_argument("block_samples must be in 1..3000 (one block < 60 KB)");
   for (const auto& [id, key] : config_.keys) verifier_.AddKey(id, key);
@@ -159,6 +169,8 @@ void RigSim::StartExperiment(const actuator_command_t& command) {
   const int delay = static_cast<int>(std::lround(e.discrete.delay_s / ts));
   e.delay_line.assign(static_cast<size_t>(delay), config_.safe_input);
   e.x = Eigen::VectorXd::Zero(e.discrete.Order());  // the simulated rig starts at rest
+  if (config_.effect.kind != EffectKind::kNone)
+    e.with_effect.emplace(std::get<TransferFunction>(config_.plant), config_.effect, ts);
   e.status.source = "rig";
   e.status.rig_id = config_.rig_id;
   e.status.experiment_id = command.experiment_id;
@@ -178,10 +190,16 @@ void RigSim::ApplySample(double u) {
     u_plant = e.delay_line.front();
     e.delay_line.pop_front();
   }
-  // x[k+1] = A x[k] + B u[k], y[k] = C x[k] + D u[k] (+ noise)
-  double y = (e.discrete.C * e.x)(0) + e.discrete.D(0, 0) * u_plant;
+  // x[k+1] = A x[k] + B u[k], y[k] = C x[k] + D u[k] (+ noise); or the plant with its effect
+  // (which carries its own delay line: it gets the commanded u).
+  double y;
+  if (e.with_effect) {
+    y = e.with_effect->Step(u);
+  } else {
+    y = (e.discrete.C * e.x)(0) + e.discrete.D(0, 0) * u_plant;
+    e.x = e.discrete.A * e.x + e.discrete.B.col(0) * u_plant;
+  }
   if (config_.noise_std > 0) y += config_.noise_std * noise_(rng_);
-  e.x = e.discrete.A * e.x + e.discrete.B.col(0) * u_plant;
   if (e.block_u.empty()) e.block_first = e.next_sample;
   e.block_u.push_back(u);
   e.block_y.push_back(y);
@@ -266,6 +284,7 @@ nlohmann::json RigSim::Details() const {
   d["safe"] = !experiment_.has_value();
   d["last_refusal"] = last_refusal_;
   d["resent_blocks"] = resent_blocks_;
+  d["effect"] = EffectToJson(config_.effect);
   if (experiment_)
     d["experiment"] = {{"experiment_id", experiment_->status.experiment_id},
                        {"samples", experiment_->next_sample},

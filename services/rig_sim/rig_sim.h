@@ -15,6 +15,7 @@
 #include <random>
 #include <string>
 
+#include "core/numeric/effects.h"
 #include "core/numeric/lti_model.h"
 #include "core/transport/signing.h"
 #include "core/transport/status.h"
@@ -35,8 +36,11 @@ struct RigSimConfig {
   int keep_experiments = 4;         // experiments whose blocks are kept for re-sending
   std::map<int32_t, HmacKey> keys;  // accepted keys by key id
   double status_period_s = 0.5;
+  // An unmodelled effect of the gap-diagnosis library on the plant (docs/gap.md); none by
+  // default. Needs a continuous plant. Config key "effect": {"effect": name, "params": {…}}.
+  Effect effect;
   // Keys: "rig_id", "model_file" or "model" (idrig.model/1), "noise_std", "seed", "max_abs",
-  // "max_rate", "watchdog_s", "safe_input", "block_samples", "key_file" + "key_id".
+  // "max_rate", "watchdog_s", "safe_input", "block_samples", "key_file" + "key_id", "effect".
   static RigSimConfig FromJson(const nlohmann::json& config);
 };
 
@@ -55,6 +59,7 @@ class RigSim {
     StateSpace discrete;
     Eigen::VectorXd x;
     std::deque<double> delay_line;  // whole-sample input delay
+    std::optional<EffectSimulator> with_effect;  // the plant with its effect, when configured
     int64_t next_sample = 0;
     int64_t block_seq = 0;
     int64_t last_command_us = 0;

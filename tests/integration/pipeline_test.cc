@@ -12,6 +12,7 @@
 
 #include "core/catalog/catalog.h"
 #include "core/catalog/experiment_store.h"
+#include "core/io/model_json.h"
 #include "core/transport/channels.h"
 #include "services/catalog/catalog_service.h"
 #include "services/excite/excite_service.h"
@@ -45,7 +46,8 @@ struct Pipeline {
   std::vector<std::unique_ptr<WorkerService>> workers;
   std::string catalog_path, store_path;
 
-  Pipeline(std::unique_ptr<Transport> t, const std::string& name, int rig_block_samples = 50)
+  Pipeline(std::unique_ptr<Transport> t, const std::string& name, int rig_block_samples = 50,
+           const Effect& rig_effect = {})
       : transport(std::move(t)) {
     const HmacKey key(32, 42);
     catalog_path = TempPath(name + "_catalog.db");
@@ -67,6 +69,7 @@ struct Pipeline {
     rc.max_abs = 2.0;
     rc.watchdog_s = 5.0;
     rc.block_samples = rig_block_samples;
+    rc.effect = rig_effect;
     rc.keys[1] = key;
     rig = std::make_unique<RigSim>(*transport, rc);
     ExciteConfig ec;
@@ -198,6 +201,41 @@ TEST(Pipeline, ExperimentToModelsInTheCatalogue) {
   int64_t done = 0;
   for (auto& w : p.workers) done += w->jobs_done();
   EXPECT_EQ(done, 2);
+}
+
+// Issue 7's service path: the simulated rig has a dead zone the sim model lacks; the diagnose
+// sequence excites it, a worker runs a gap-diagnose job against the sim model, and the report
+// lands in the catalogue's diagnosis reports with its lineage.
+TEST(Pipeline, GapDiagnosisJobFindsTheRigsEffect) {
+  const double width = 0.3;
+  Pipeline p(MakeLcmTransport("memq://"), "gap", 50, Effect{EffectKind::kDeadZone, {width}});
+  StartExperiment(*p.transport, 201, "diagnose:T=100,f1=0.5,amp=1.5,seed=3", 5.0, 200.0);
+  Catalog reader(p.catalog_path);
+  auto experiment_done = [&] {
+    for (const auto& e : reader.Experiments("rig-t"))
+      if (e.experiment_id == 201 && e.state == "done") return true;
+    return false;
+  };
+  ASSERT_TRUE(p.RunUntil(experiment_done, 20.0)) << "the experiment did not finish";
+  const nlohmann::json options = {{"sim", ModelToJson(Plant())}};
+  RequestModel(*p.transport, 9201, 201, "gap-diagnose", options.dump());
+  ASSERT_TRUE(p.RunUntil([&] { return reader.ModelForRequest(9201).has_value(); }, 30.0))
+      << "no diagnosis stored";
+  const ModelRecord m = *reader.ModelForRequest(9201);
+  EXPECT_EQ(m.method, "gap-diagnose");
+  EXPECT_EQ(m.n_samples, 1000);
+  const auto reports = reader.Diagnoses("rig-t");
+  ASSERT_EQ(reports.size(), 1u);
+  EXPECT_EQ(reports[0].request_id, 9201);
+  EXPECT_EQ(reports[0].experiment_id, 201);
+  EXPECT_EQ(reports[0].model_id, m.model_id);
+  const nlohmann::json report = nlohmann::json::parse(reports[0].report_json);
+  EXPECT_EQ(report.at("format"), "idrig.gap/1");
+  EXPECT_EQ(report.at("verdict").at("effect"), "dead_zone") << report.at("verdict").dump();
+  EXPECT_NEAR(report.at("verdict").at("params").at("d").get<double>(), width, 0.15 * width);
+  EXPECT_LT(report.at("verdict").at("nrmse_after").get<double>(),
+            0.5 * report.at("verdict").at("nrmse_before").get<double>());
+  EXPECT_EQ(reader.Diagnosis(reports[0].report_id)->report_json, reports[0].report_json);
 }
 
 TEST(Pipeline, BadRequestsFailWithAMessage) {

@@ -2,6 +2,7 @@
 // idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--jobs J] [--json]
 #include <atomic>
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -13,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/catalog/catalog.h"
 #include "core/io/csv.h"
 #include "core/io/gap_json.h"
 #include "core/io/gap_svg.h"
@@ -198,21 +200,39 @@ void RegisterGapCommand(CLI::App& app) {
   });
 
   struct ReportArgs {
-    std::string source, plots;
+    std::string source, plots, db = "idrig-demo/catalog.db";
   };
   auto r = std::make_shared<ReportArgs>();
   auto* report_cmd = gap->add_subcommand(
-      "report", "render a stored diagnosis report (idrig.gap/1 JSON file) as text, with SVG plots");
-  report_cmd->add_option("report", r->source, "report file written by `gap diagnose --json`")->required();
+      "report", "render a stored diagnosis report as text, with SVG plots: a report id in the "
+                "catalogue (workers' gap-diagnose jobs), or an idrig.gap/1 JSON file");
+  report_cmd->add_option("report", r->source, "report id in the catalogue, or a file written by `gap diagnose --json`")
+      ->required();
+  report_cmd->add_option("--db", r->db, "catalogue file (idrig-catalog's db_path) for report ids");
   report_cmd->add_option("--plots", r->plots, "write SVG plots into this directory");
   report_cmd->callback([r] {
-    std::ifstream file(r->source);
-    if (!file) throw std::invalid_argument("cannot open report '" + r->source + "'");
     nlohmann::json report;
-    try {
-      report = nlohmann::json::parse(file);
-    } catch (const nlohmann::json::parse_error& e) {
-      throw std::invalid_argument(r->source + ": not valid JSON: " + e.what());
+    const bool is_id = !r->source.empty() &&
+                       r->source.find_first_not_of("0123456789") == std::string::npos &&
+                       !std::filesystem::exists(r->source);
+    if (is_id) {
+      if (!std::filesystem::exists(r->db))
+        throw std::invalid_argument("no catalogue at '" + r->db + "' (give --db)");
+      Catalog catalog(r->db, true);
+      const auto stored = catalog.Diagnosis(std::stoll(r->source));
+      if (!stored) throw std::invalid_argument("no diagnosis report " + r->source + " in " + r->db);
+      report = nlohmann::json::parse(stored->report_json);
+      std::cout << "report " << stored->report_id << ": rig " << stored->rig_id << ", experiment "
+                << stored->experiment_id << ", request " << stored->request_id << ", model "
+                << stored->model_id << "\n";
+    } else {
+      std::ifstream file(r->source);
+      if (!file) throw std::invalid_argument("cannot open report '" + r->source + "'");
+      try {
+        report = nlohmann::json::parse(file);
+      } catch (const nlohmann::json::parse_error& e) {
+        throw std::invalid_argument(r->source + ": not valid JSON: " + e.what());
+      }
     }
     if (report.value("format", "") != "idrig.gap/1")
       throw std::invalid_argument(r->source + ": not a gap report (format is not idrig.gap/1)");

@@ -144,6 +144,18 @@ TEST(Catalog, DiagnosisReportsAreIdempotent) {
   EXPECT_TRUE(a.second);
   EXPECT_FALSE(b.second);
   EXPECT_EQ(a.first, b.first);
+  // Read back with the lineage; the second store did not replace the first.
+  c.StoreDiagnosis(6, "rig-b", 0, 8, "{\"x\":2}", 12);
+  const auto stored = c.Diagnosis(a.first);
+  ASSERT_TRUE(stored.has_value());
+  EXPECT_EQ(stored->request_id, 5);
+  EXPECT_EQ(stored->experiment_id, 7);
+  EXPECT_EQ(stored->created_utime, 10);
+  EXPECT_EQ(stored->report_json, "{}");
+  EXPECT_EQ(c.Diagnoses().size(), 2u);
+  ASSERT_EQ(c.Diagnoses("rig-b").size(), 1u);
+  EXPECT_EQ(c.Diagnoses("rig-b")[0].report_json, "{\"x\":2}");
+  EXPECT_FALSE(c.Diagnosis(999).has_value());
 }
 
 TEST(Catalog, NotACatalogueIsAnError) {
