@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # End-to-end: `idrig demo` inside a private network namespace (udpm, ttl=0), then the
-# catalogue is checked with the sqlite3 shell: four models, one per request, each with its
-# lineage (experiment and its signal, data hash, method, options, software version, time).
+# catalogue is checked with the sqlite3 shell: five models (four identifications and one gap
+# diagnosis), one per request, each with its lineage (experiment and its signal, data hash,
+# method, options, software version, time), and the diagnosis report.
 # Usage: demo_e2e.sh path/to/idrig   (needs root for unshare -n; exits 77 = skipped otherwise)
 set -euo pipefail
 idrig=$(readlink -f "$1")
@@ -20,19 +21,26 @@ fail() { echo "FAIL: $*"; cat "$dir/out.txt"; exit 1; }
 
 [ "$(q 'PRAGMA integrity_check')" = ok ] || fail "integrity_check"
 [ "$(q 'PRAGMA journal_mode')" = wal ] || fail "not WAL"
-[ "$(q 'SELECT count(*) FROM models')" = 4 ] || fail "expected 4 models, got $(q 'SELECT count(*) FROM models')"
-[ "$(q 'SELECT count(DISTINCT request_id) FROM models')" = 4 ] || fail "a request stored twice"
-[ "$(q "SELECT group_concat(method, ',') FROM (SELECT DISTINCT method FROM models ORDER BY method)")" = "arx,arx-oe,finite-frequency" ] \
+[ "$(q 'SELECT count(*) FROM models')" = 5 ] || fail "expected 5 models, got $(q 'SELECT count(*) FROM models')"
+[ "$(q 'SELECT count(DISTINCT request_id) FROM models')" = 5 ] || fail "a request stored twice"
+[ "$(q "SELECT group_concat(method, ',') FROM (SELECT DISTINCT method FROM models ORDER BY method)")" = "arx,arx-oe,finite-frequency,gap-diagnose" ] \
   || fail "methods: $(q 'SELECT group_concat(method) FROM models')"
 # Lineage: every model joins its experiment, which names its signal; hashes and versions set.
 [ "$(q "SELECT count(*) FROM models m JOIN experiments e USING (rig_id, experiment_id)
         WHERE e.state = 'done' AND e.signal_spec <> '' AND length(m.data_hash) = 64
           AND m.software_version <> '' AND m.options_json LIKE '{%' AND m.created_utime > 0
-          AND m.n_samples = e.samples_total")" = 4 ] || fail "lineage incomplete: $(q 'SELECT * FROM experiments')"
-[ "$(q "SELECT count(*) FROM experiments WHERE signal_spec LIKE 'step:%' OR signal_spec LIKE 'multisine:%'")" = 2 ] || fail "experiments"
+          AND m.n_samples = e.samples_total")" = 5 ] || fail "lineage incomplete: $(q 'SELECT * FROM experiments')"
+[ "$(q "SELECT count(*) FROM experiments WHERE signal_spec LIKE 'step:%' OR signal_spec LIKE 'multisine:%' OR signal_spec LIKE 'diagnose:%'")" = 3 ] || fail "experiments"
 # Two models of the same experiment identified the same data.
-[ "$(q 'SELECT count(DISTINCT data_hash) FROM models')" = 2 ] || fail "data hashes"
-[ "$(q "SELECT count(*) FROM jobs WHERE state = 'done'")" = 4 ] || fail "jobs not done"
+[ "$(q 'SELECT count(DISTINCT data_hash) FROM models')" = 3 ] || fail "data hashes"
+[ "$(q "SELECT count(*) FROM jobs WHERE state = 'done'")" = 5 ] || fail "jobs not done"
+# The gap diagnosis of the demo's mis-set sim model (slow pole 20 % off): a parameter mismatch,
+# stored with its lineage, rendered again by `idrig gap report`.
+[ "$(q "SELECT count(*) FROM diagnosis_reports d JOIN models m USING (model_id)
+        WHERE m.method = 'gap-diagnose' AND d.request_id = m.request_id
+          AND d.experiment_id = m.experiment_id")" = 1 ] || fail "diagnosis report lineage"
+"$idrig" gap report 1 --db "$db" --plots "$dir/gap" | grep -q "^verdict: parameter_mismatch" || fail "gap report"
+grep -q "</svg>" "$dir/gap/gap_frequency.svg" || fail "gap plots"
 # The multisine arx-oe model finds the plant's slow pole -0.5 within 5 %.
 [ "$(q "SELECT count(*) FROM metrics x JOIN models m USING (model_id) JOIN experiments e USING (rig_id, experiment_id)
         WHERE m.method = 'arx-oe' AND e.signal_spec LIKE 'multisine:%' AND x.name = 'wn_1'

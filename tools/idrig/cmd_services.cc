@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "core/catalog/catalog.h"
+#include "core/io/gap_json.h"
 #include "core/io/model_json.h"
 #include "core/transport/channels.h"
 #include "core/transport/signing.h"
@@ -267,6 +268,15 @@ struct DemoJob {
   std::string label, method, options;
 };
 
+
+// The demo's "simulation model": the rig's plant with its last denominator coefficient 20 % low
+// (1.2 instead of 1.5), as a designer's model with a mis-estimated stiffness would be.
+TransferFunction DemoSimModel(const TransferFunction& plant) {
+  TransferFunction sim = plant;
+  sim.den(sim.den.size() - 1) *= 0.8;
+  return sim;
+}
+
 void RunDemo(const std::string& dir, int port, double speed, int workers, bool allow_netns) {
   const std::string url = PrivateUdpmUrl(port, 0);
   if (!MulticastWorks(url)) {
@@ -356,6 +366,7 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
   std::vector<Experiment> experiments = {
       {"step", "step:amp=1,at=1", 10.0, 30.0},
       {"multisine", "multisine:f0=0.05,lines=1;3;9,amp=1", 20.0, 200.0},
+      {"diagnose", "diagnose:T=100,f1=0.5,amp=1,seed=1", 10.0, 200.0},
   };
   std::cout << "[2/4] experiments on rig " << rig << " (simulated time x" << speed << "):\n";
   for (auto& e : experiments) {
@@ -415,6 +426,10 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
                        {"multiples", {1, 3, 9}},
                        {"skip_base_periods", 1}})
            .dump()},
+      // The user's simulation model of the rig, with a slow pole 20 % off: the gap diagnosis
+      // against it, on the diagnose sequence (docs/gap.md).
+      {NewId(), experiments[2].id, "diagnose", "gap-diagnose",
+       nlohmann::json({{"sim", ModelToJson(DemoSimModel(plant))}}).dump()},
   };
   std::cout << "[3/4] identification jobs (claimed by the workers, stored by the catalogue):\n";
   const auto start = std::chrono::steady_clock::now();
@@ -461,6 +476,15 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
   }
   std::cout
       << "true plant: W = (0.5 s + 1) / (s^3 + 2.5 s^2 + 4 s + 1.5), poles -0.5, -1+-1.414j\n\n";
+  for (const auto& d : catalog.Diagnoses(rig, 1)) {
+    std::cout << "gap diagnosis " << d.report_id << " of the sim model W = (0.5 s + 1) / (s^3 + "
+              << "2.5 s^2 + 4 s + 1.2) against experiment " << d.experiment_id << ":\n";
+    std::istringstream text(GapReportText(nlohmann::json::parse(d.report_json)));
+    std::string line;
+    for (int i = 0; i < 4 && std::getline(text, line); ++i) std::cout << "  " << line << "\n";
+    std::cout << "  (whole report and plots: build/bin/idrig gap report " << d.report_id << " --db "
+              << dir << "/catalog.db --plots " << dir << "/gap)\n\n";
+  }
   std::cout << "all models of rig " << rig << " (every demo run adds to the history):\n";
   PrintModelTable(catalog, catalog.Models(rig));
   std::cout << "\n";
