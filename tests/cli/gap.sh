@@ -3,8 +3,8 @@
 # (written by `gap bench --dump`), the JSON interface scripts depend on, and bad input.
 source "$(dirname "$0")/lib/common.bash"
 
-# Cases cycle through the vocabulary: case 2 is time_delay, case 6 dead_zone.
-"$idrig" gap bench --cases 7 --seed 5 --samples 2000 --dump "$dir" --json > "$dir/bench.json" 2>/dev/null \
+# Cases cycle through the vocabulary: case 1 is parameter_mismatch, case 2 time_delay.
+"$idrig" gap bench --cases 3 --seed 5 --samples 2000 --dump "$dir" --json > "$dir/bench.json" 2>/dev/null \
   || fail "gap bench exited with $?"
 grep -q '"top1_accuracy"' "$dir/bench.json" || fail "bench JSON lacks top1_accuracy"
 grep -q '"effect": "time_delay"' "$dir/case2-truth.json" || fail "case 2 is not a time_delay case"
@@ -35,7 +35,7 @@ cmp -s "$dir/plots/gap_ranking.svg" "$dir/plots2/gap_ranking.svg" || fail "plots
 echo "ok: report and plots"
 
 # One record only: split in time, said in the notes; text output names the verdict.
-text=$("$idrig" gap diagnose --sim "$dir/case6-sim.json" --data "$dir/case6-est.csv") \
+text=$("$idrig" gap diagnose --sim "$dir/case1-sim.json" --data "$dir/case1-est.csv") \
   || fail "gap diagnose (one record) exited with $?"
 grep -q "first half" <<<"$text" || fail "no note about the split: $text"
 grep -q "^verdict:" <<<"$text" || fail "no verdict line: $text"
