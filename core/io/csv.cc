@@ -114,13 +114,13 @@ IoRecord ParseIoRecordCsv(const std::string& text, const std::string& source_nam
     for (size_t c = 0; c < input_columns.size(); ++c) record.u(r, c) = rows[r][input_columns[c]];
     for (size_t c = 0; c < output_columns.size(); ++c) record.y(r, c) = rows[r][output_columns[c]];
   }
-  record.sample_time = n >= 2 ? record.t(1) - record.t(0) : 0.0;
+  // The mean step: times printed with few digits scatter around the grid, their mean does not.
+  record.sample_time = n >= 2 ? (record.t(n - 1) - record.t(0)) / (n - 1) : 0.0;
   try {
     ValidateIoRecord(record, 2);
   } catch (const std::invalid_argument& e) {
     fail(e.what());
   }
-  if (n >= 2) record.sample_time = (record.t(n - 1) - record.t(0)) / (n - 1);  // mean step
   return record;
 }
 

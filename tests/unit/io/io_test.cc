@@ -33,6 +33,24 @@ TEST(Csv, SisoAndMimoRoundTrip) {
   EXPECT_EQ(again.y, mimo.y);
 }
 
+TEST(Csv, TimesPrintedWithFewDigitsAreTheUniformGrid) {
+  // t = k/300 s printed with "%.4f" (±5e-5 s per value: ±1.5 % of the step, ±3 % per step):
+  // accepted, with the mean step as the sample time.
+  std::string csv = "t,u,y\n";
+  char line[64];
+  for (int k = 0; k < 3000; ++k) {
+    std::snprintf(line, sizeof line, "%.4f,%d,%d\n", k / 300.0, k % 2, k % 3);
+    csv += line;
+  }
+  const IoRecord record = ParseIoRecordCsv(csv);
+  EXPECT_NEAR(record.sample_time, 1 / 300.0, 1e-7);
+  EXPECT_EQ(record.NumSamples(), 3000);
+  // A missing sample in the same file is still an error.
+  const auto cut = csv.find("\n", csv.find("\n3.3333,") + 1) + 1;
+  const std::string missing = csv.substr(0, csv.find("\n3.3333,") + 1) + csv.substr(cut);
+  EXPECT_THROW(ParseIoRecordCsv(missing), std::invalid_argument);
+}
+
 TEST(CsvBadInput, EachProblemIsNamed) {
   ExpectError("", "empty file");
   ExpectError("0,1,2\n1,2,3\n", "missing header");
