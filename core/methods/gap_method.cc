@@ -26,28 +26,15 @@ TransferFunction SimModelFrom(const nlohmann::json& options) {
     throw std::invalid_argument(
         "gap-diagnose: give the sim model as option 'sim' (an idrig.model/1 object) or 'sim_path'");
   }
-  if (const auto* tf = std::get_if<TransferFunction>(&model)) return *tf;
-  const StateSpace& ss = std::get<StateSpace>(model);
-  if (ss.NumInputs() != 1 || ss.NumOutputs() != 1)
-    throw std::invalid_argument("gap-diagnose: the sim model must be SISO");
-  TransferFunction tf = ToTransferFunction(ss);
-  tf.delay_s = ss.delay_s;
-  return tf;
+  return SimModelTransferFunction(model);
 }
 
 MethodReport RunGapDiagnosis(const MethodInput& input, const nlohmann::json& options) {
   CheckOptionKeys(options, {"sim", "sim_path", "substeps", "significance"}, "gap-diagnose");
-  const IoRecord& record = *input.record;
-  if (record.NumInputs() != 1 || record.NumOutputs() != 1)
-    throw std::invalid_argument("gap-diagnose: the record must be SISO (t,u,y)");
   GapOptions gap;
   if (options.contains("substeps")) gap.substeps = options.at("substeps").get<int>();
   if (options.contains("significance")) gap.significance = options.at("significance").get<double>();
-  GapRecord r;
-  r.u = record.u.col(0);
-  r.y = record.y.col(0);
-  r.sample_time = record.sample_time;
-  const GapReport report = DiagnoseGap(SimModelFrom(options), {r}, {}, gap);
+  const GapReport report = DiagnoseGap(SimModelFrom(options), {ToGapRecord(*input.record)}, {}, gap);
   MethodReport out;
   out.json["model"] = ModelToJson(report.verdict.plant);
   out.json["fit_percent"] = 100.0 * (1.0 - report.verdict.nrmse_after);

@@ -459,6 +459,28 @@ Eigen::VectorXd Stack(const std::vector<GapRecord>& records,
 
 }  // namespace
 
+TransferFunction SimModelTransferFunction(const LtiModel& model) {
+  if (const auto* tf = std::get_if<TransferFunction>(&model)) return *tf;
+  const StateSpace& ss = std::get<StateSpace>(model);
+  if (ss.NumInputs() != 1 || ss.NumOutputs() != 1)
+    Fail("the sim model must be SISO; it has " + std::to_string(ss.NumInputs()) + " inputs and " +
+         std::to_string(ss.NumOutputs()) + " outputs");
+  TransferFunction tf = ToTransferFunction(ss);
+  tf.delay_s = ss.delay_s;
+  return tf;
+}
+
+GapRecord ToGapRecord(const IoRecord& record) {
+  if (record.NumInputs() != 1 || record.NumOutputs() != 1)
+    Fail("the records must be SISO (t,u,y); this one has " + std::to_string(record.NumInputs()) +
+         " inputs and " + std::to_string(record.NumOutputs()) + " outputs");
+  GapRecord r;
+  r.u = record.u.col(0);
+  r.y = record.y.col(0);
+  r.sample_time = record.sample_time;
+  return r;
+}
+
 void SplitRecord(const GapRecord& record, std::vector<GapRecord>& estimation,
                  std::vector<GapRecord>& validation) {
   const long n = record.u.size();
@@ -777,7 +799,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     v.explanation = v.effect + " closes " + std::to_string(int(std::round(100 * v.shrink))) +
                     " % of the explainable gap on the validation records";
 
-  report.where = LocateGap(g0, validation, std::sqrt(noise_mse), &top.plant);
+  report.where = LocateGap(g0, validation, std::sqrt(noise_mse));
   report.where.noise_nrmse = noise_nrmse;
   return report;
 }

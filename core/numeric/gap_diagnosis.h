@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "core/numeric/effects.h"
+#include "core/numeric/io_record.h"
 #include "core/numeric/lti_model.h"
 
 namespace idrig {
@@ -133,9 +134,14 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
 void SplitRecord(const GapRecord& record, std::vector<GapRecord>& estimation,
                  std::vector<GapRecord>& validation);
 
-// Localisation only (also used by DiagnoseGap). `noise_sigma` ≤ 0: estimated from the
-// residual's high-frequency part.
+// Localisation only (also used by DiagnoseGap). `noise_sigma` ≤ 0: unknown, the residual's RMS
+// is used (so the gap is never called significant).
 GapWhere LocateGap(const TransferFunction& sim_model, const std::vector<GapRecord>& records,
-                   double noise_sigma, const TransferFunction* fixed_model = nullptr);
+                   double noise_sigma);
+
+// The front ends' conversions: a SISO sim model (tf, or ss with one input and one output) as a
+// transfer function, and a SISO record (t,u,y). Throw std::invalid_argument for MIMO.
+TransferFunction SimModelTransferFunction(const LtiModel& model);
+GapRecord ToGapRecord(const IoRecord& record);
 
 }  // namespace idrig

@@ -138,7 +138,7 @@ std::vector<int> QuantileBins(const Eigen::VectorXd& x, int n, const char* what,
 }  // namespace
 
 GapWhere LocateGap(const TransferFunction& sim_model, const std::vector<GapRecord>& records,
-                   double noise_sigma, const TransferFunction* /*fixed_model*/) {
+                   double noise_sigma) {
   GapWhere where;
   const double ts = records.front().sample_time;
   std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>> ue;
@@ -175,7 +175,7 @@ GapWhere LocateGap(const TransferFunction& sim_model, const std::vector<GapRecor
   where.nrmse_before = Nrmse(y_all, yhat_all)(0);
   const double rms_e = std::sqrt(e_all.squaredNorm() / n);
   if (!(noise_sigma > 0)) {
-    // Without a fitted candidate: the high-frequency half of the residual spectrum as noise.
+    // No noise level given: take the residual itself (gap/noise = 1, nothing called significant).
     noise_sigma = rms_e;
   }
   where.gap_to_noise = rms_e / noise_sigma;

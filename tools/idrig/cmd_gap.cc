@@ -26,30 +26,6 @@
 namespace idrig {
 namespace {
 
-GapRecord LoadRecord(const std::string& path) {
-  const IoRecord record = ReadIoRecordCsv(path);
-  if (record.NumInputs() != 1 || record.NumOutputs() != 1)
-    throw std::invalid_argument(path + ": the gap diagnosis takes SISO records (t,u,y); this one has " +
-                                std::to_string(record.NumInputs()) + " inputs and " +
-                                std::to_string(record.NumOutputs()) + " outputs");
-  GapRecord r;
-  r.u = record.u.col(0);
-  r.y = record.y.col(0);
-  r.sample_time = record.sample_time;
-  return r;
-}
-
-TransferFunction LoadSimModel(const std::string& path) {
-  const LtiModel model = ReadModelFile(path);
-  if (const auto* tf = std::get_if<TransferFunction>(&model)) return *tf;
-  const StateSpace& ss = std::get<StateSpace>(model);
-  if (ss.NumInputs() != 1 || ss.NumOutputs() != 1)
-    throw std::invalid_argument(path + ": the sim model must be SISO for the gap diagnosis");
-  TransferFunction tf = ToTransferFunction(ss);
-  tf.delay_s = ss.delay_s;
-  return tf;
-}
-
 struct BenchOutcome {
   EffectKind truth;
   std::string verdict;
@@ -184,10 +160,10 @@ void RegisterGapCommand(CLI::App& app) {
   diagnose->add_flag("--json", d->json, "print the report as JSON (idrig.gap/1)");
   diagnose->add_option("--plots", d->plots, "also write SVG plots of the gap (frequency, amplitude, state, time, ranking) into this directory");
   diagnose->callback([d] {
-    const TransferFunction sim = LoadSimModel(d->sim);
+    const TransferFunction sim = SimModelTransferFunction(ReadModelFile(d->sim));
     std::vector<GapRecord> estimation, validation;
-    for (const auto& p : d->data) estimation.push_back(LoadRecord(p));
-    for (const auto& p : d->validate) validation.push_back(LoadRecord(p));
+    for (const auto& p : d->data) estimation.push_back(ToGapRecord(ReadIoRecordCsv(p)));
+    for (const auto& p : d->validate) validation.push_back(ToGapRecord(ReadIoRecordCsv(p)));
     const GapReport report = DiagnoseGap(sim, estimation, validation);
     nlohmann::json out = GapReportToJson(report);
     out["sim"] = d->sim;
