@@ -9,7 +9,7 @@
 // segment_length, overlap) or, with period_samples, the periodic estimator.
 // Common options: output, input (1-based element of a MIMO FRF for the SISO methods),
 // f_min_hz, f_max_hz (band), weight ("none" | "f" as in Balda's listing | "inverse_std"
-// when the FRF carries a variance).
+// when the FRF carries a variance | "inverse_magnitude" for noise relative to |H|).
 #include <cmath>
 #include <sstream>
 
@@ -116,24 +116,31 @@ Frf SisoElement(const Frf& frf, const json& o, Eigen::VectorXd* weights) {
   Eigen::VectorXcd h(keep.size());
   Eigen::VectorXd wt = Eigen::VectorXd::Ones(keep.size());
   if (o.contains("weight") && !o["weight"].is_string())
-    throw std::invalid_argument("option 'weight' must be none, f or inverse_std");
+    throw std::invalid_argument("option 'weight' must be none, f, inverse_std or inverse_magnitude");
   const std::string weight = o.contains("weight") ? o["weight"].get<std::string>() : "none";
   for (size_t i = 0; i < keep.size(); ++i) {
     w(i) = frf.omega(keep[i]);
     h(i) = frf.h[keep[i]](out - 1, in - 1);
     if (weight == "f") wt(i) = w(i) / (2 * kPi);
+    else if (weight == "inverse_magnitude") {
+      if (!(std::abs(h(i)) > 0.0))
+        throw std::invalid_argument("weight=inverse_magnitude: |H| is 0 at " + std::to_string(w(i) / (2 * kPi)) + " Hz");
+      wt(i) = 1.0 / std::abs(h(i));
+    }
     else if (weight == "inverse_std") {
       if (!frf.variance.size()) throw std::invalid_argument("weight=inverse_std needs an FRF with a variance (time record input)");
       const double v = frf.variance(keep[i], (out - 1) + frf.NumOutputs() * (in - 1));
       wt(i) = 1.0 / std::sqrt(std::max(v, 1e-300));
     } else if (weight != "none") {
-      throw std::invalid_argument("option 'weight' must be none, f or inverse_std");
+      throw std::invalid_argument("option 'weight' must be none, f, inverse_std or inverse_magnitude");
     }
   }
   *weights = wt.allFinite() ? wt : Eigen::VectorXd();
   if (weight == "none") *weights = Eigen::VectorXd();
   return MakeSisoFrf(w, h);
 }
+
+json NullIfNan(double v) { return std::isnan(v) ? json(nullptr) : json(v); }
 
 json Complexes(const Eigen::VectorXcd& v) {
   json a = json::array();
@@ -218,7 +225,7 @@ MethodReport Rational(const MethodInput& input, const json& o, bool stable) {
 
 MethodReport PoleResidue(const MethodInput& input, const json& o) {
   CheckOptionKeys(o, Keys({"peak_tolerance", "peaks_hz", "fictitious_poles", "origin_correction",
-                           "max_function_evaluations"}), "pole-residue");
+                           "max_residual_poles", "max_function_evaluations"}), "pole-residue");
   const LoadedFrf loaded = Load(input, o);
   Eigen::VectorXd weights;
   const Frf frf = SisoElement(loaded.frf, o, &weights);
@@ -227,6 +234,8 @@ MethodReport PoleResidue(const MethodInput& input, const json& o) {
   po.fictitious_poles = GetBool(o, "fictitious_poles", true);
   po.origin_correction = GetBool(o, "origin_correction", true);
   po.max_function_evaluations = GetInt(o, "max_function_evaluations", po.max_function_evaluations);
+  po.max_residual_poles = GetInt(o, "max_residual_poles", po.max_residual_poles);
+  if (po.max_residual_poles < 0) throw std::invalid_argument("option 'max_residual_poles' must be >= 0");
   po.weights = weights;
   if (o.contains("peaks_hz")) {
     const json& p = o["peaks_hz"];
@@ -251,18 +260,23 @@ MethodReport PoleResidue(const MethodInput& input, const json& o) {
   std::ostringstream t;
   t.precision(6);
   t << "pole-residue fit [Balda (24)-(35), ideSISO]: " << r.message << ", fit " << r.fit_percent << " %\n";
-  t << "   k     Re s       Im s     f_n [Hz]   zeta       Q\n";
+  t << "   k     Re s       Im s     f_n [Hz]   zeta       Q   std: Re s    Im s     zeta\n";
   int k = 0;
   for (const Mode& m : r.modes) {
     modes.push_back({{"eigenvalue", {m.eigenvalue.real(), m.eigenvalue.imag()}},
                      {"residue", {m.residue.real(), m.residue.imag()}},
                      {"natural_frequency_rad_s", m.natural_frequency},
                      {"natural_frequency_hz", m.natural_frequency / (2 * kPi)},
-                     {"damping_ratio", m.damping_ratio}, {"q", m.q}, {"fictitious", m.fictitious}});
-    char line[200];
-    std::snprintf(line, sizeof line, "  %2d %9.3f %10.3f %10.3f %8.4f %8.2f%s\n", ++k, m.eigenvalue.real(),
-                  m.eigenvalue.imag(), m.natural_frequency / (2 * kPi), m.damping_ratio, m.q,
-                  m.fictitious ? "  (fictitious)" : "");
+                     {"damping_ratio", m.damping_ratio}, {"q", m.q}, {"fictitious", m.fictitious},
+                     {"from_residual", m.from_residual},
+                     {"std", {{"real", NullIfNan(m.std_real)}, {"imag", NullIfNan(m.std_imag)},
+                              {"natural_frequency_rad_s", NullIfNan(m.std_natural_frequency)},
+                              {"damping_ratio", NullIfNan(m.std_damping_ratio)}}}});
+    char line[240];
+    std::snprintf(line, sizeof line, "  %2d %9.3f %10.3f %10.3f %8.4f %8.2f %11.3g %8.3g %8.3g%s\n", ++k,
+                  m.eigenvalue.real(), m.eigenvalue.imag(), m.natural_frequency / (2 * kPi), m.damping_ratio, m.q,
+                  m.std_real, m.std_imag, m.std_damping_ratio,
+                  m.fictitious ? "  (fictitious)" : m.from_residual ? "  (from the residual)" : "");
     t << line;
   }
   json d;
@@ -338,7 +352,7 @@ std::vector<MethodInfo> FrequencyMethods() {
        false, [](const MethodInput& in, const json& o) { return Rational(in, o, false); }},
       {"stable-nls", "stable-by-construction nonlinear FRF regression (seed 002 (9)-(12)): --order n, numerator_degree",
        false, [](const MethodInput& in, const json& o) { return Rational(in, o, true); }},
-      {"pole-residue", "modal pole-residue fit of an FRF from its peaks (seed 002 (24)-(35)): peak_tolerance, peaks_hz",
+      {"pole-residue", "modal pole-residue fit of an FRF from its peaks (seed 002 (24)-(35)): peak_tolerance, peaks_hz, max_residual_poles, weight",
        false, [](const MethodInput& in, const json& o) { return PoleResidue(in, o); }},
       {"mbk", "M, B, K from a receptance FRF matrix (seed 002 (16)-(22)): variant=product|difference",
        false, [](const MethodInput& in, const json& o) { return Mbk(in, o); }},

@@ -109,6 +109,119 @@ Mode MakeMode(Complex s, Complex a, double ws, bool fictitious) {
   m.fictitious = fictitious;
   return m;
 }
+bool Converged(Eigen::LevenbergMarquardtSpace::Status status) {
+  using namespace Eigen::LevenbergMarquardtSpace;
+  return status == RelativeReductionTooSmall || status == RelativeErrorTooSmall ||
+         status == RelativeErrorAndReductionTooSmall || status == CosinusTooSmall || status == FtolTooSmall ||
+         status == XtolTooSmall || status == GtolTooSmall;
+}
+
+// Residues and h_o by linear least squares given the poles s, Eq. (35) (real unknowns);
+// returns the LM vector x (layout of Functor).
+Eigen::VectorXd LinearResidues(const Eigen::VectorXcd& p, const Eigen::VectorXcd& g, const Eigen::VectorXd& w,
+                               const Eigen::VectorXcd& s, const PoleResidueOptions& options) {
+  const int lines = static_cast<int>(p.size()), ns = static_cast<int>(s.size());
+  const int lin = 2 * ns + (options.origin_correction ? 2 : 0);
+  Eigen::MatrixXd L(2 * lines, lin);
+  Eigen::VectorXd y(2 * lines);
+  for (int k = 0; k < lines; ++k) {
+    auto put = [&](int col, Complex d) {
+      L(k, col) = w(k) * d.real();
+      L(lines + k, col) = w(k) * d.imag();
+    };
+    for (int n = 0; n < ns; ++n) {
+      Complex re = 1.0 / (p(k) - s(n)), im = kI / (p(k) - s(n));
+      if (options.conjugate_pairs) {
+        re += 1.0 / (p(k) - std::conj(s(n)));
+        im += -kI / (p(k) - std::conj(s(n)));
+      }
+      put(n, re);
+      put(ns + n, im);
+    }
+    if (options.origin_correction) {
+      put(2 * ns, 1.0);
+      put(2 * ns + 1, kI);
+    }
+    y(k) = w(k) * g(k).real();
+    y(lines + k) = w(k) * g(k).imag();
+  }
+  const Eigen::VectorXd c = L.colPivHouseholderQr().solve(y);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(4 * ns + 2);
+  for (int n = 0; n < ns; ++n) {
+    x(n) = s(n).real();
+    x(ns + n) = s(n).imag();
+    x(2 * ns + n) = c(n);
+    x(3 * ns + n) = c(ns + n);
+  }
+  if (options.origin_correction) x.tail(2) = c.tail(2);
+  return x;
+}
+
+struct Refinement {
+  Eigen::VectorXd x;
+  double cost = 0.0;  // Σ w²|model − g|²
+  Eigen::LevenbergMarquardtSpace::Status status = Eigen::LevenbergMarquardtSpace::Running;
+  int iterations = 0, function_evaluations = 0;
+};
+
+// Levenberg–Marquardt (MINPACK lmder) on (26) with the Jacobian (28) from x.
+Refinement Refine(const Eigen::VectorXcd& p, const Eigen::VectorXcd& g, const Eigen::VectorXd& w,
+                  const Eigen::VectorXd& x0, const PoleResidueOptions& options) {
+  const int ns = static_cast<int>(x0.size() - 2) / 4;
+  Functor functor(p, g, w, ns, options.conjugate_pairs, options.origin_correction);
+  Eigen::LevenbergMarquardt<Functor> lm(functor);
+  lm.setMaxfev(options.max_function_evaluations);
+  lm.setFtol(options.tolerance);
+  lm.setXtol(options.tolerance);
+  Refinement out;
+  out.x = x0;
+  // s ← −|Re s| + i Im s as in `ideSISO`; a pole that crossed into the right half-plane is
+  // reflected and LM run once more from there, so the cost is that of the stable model.
+  for (int pass = 0; pass < 2; ++pass) {
+    out.status = lm.minimize(out.x);
+    out.iterations += static_cast<int>(lm.iterations());
+    out.function_evaluations += static_cast<int>(lm.nfev());
+    if (!out.x.allFinite() || (out.x.head(ns).array() <= 0.0).all()) break;
+    out.x.head(ns) = -out.x.head(ns).cwiseAbs();
+  }
+  out.x.head(ns) = -out.x.head(ns).cwiseAbs();
+  Eigen::VectorXd r(functor.values());
+  functor(out.x, r);
+  out.cost = r.squaredNorm();
+  return out;
+}
+
+// Cov(x) = σ̂²·(JᵀJ)⁺, σ̂² = |r|²/(2L − P), from the weighted residuals r and their
+// Jacobian (28) at the optimum; modes[n] belongs to pole n (before sorting). The (Re s, Im s)
+// block gives ω_n = |s| and ζ = −Re s/|s| to first order.
+void AttachStandardErrors(const Functor& functor, const Eigen::VectorXd& x, double ws, bool origin,
+                          std::vector<Mode>* modes) {
+  const int ns = functor.ns, params = 4 * ns + (origin ? 2 : 0);
+  const int equations = functor.values();
+  if (equations <= params) return;
+  Eigen::VectorXd r(equations);
+  Eigen::MatrixXd jac(equations, x.size());
+  functor(x, r);
+  functor.df(x, jac);
+  const double variance = r.squaredNorm() / (equations - params);
+  const Eigen::MatrixXd used = jac.leftCols(params);
+  const Eigen::MatrixXd cov =
+      variance * Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(used.transpose() * used).pseudoInverse();
+  for (int n = 0; n < ns; ++n) {
+    Mode& m = (*modes)[n];
+    Eigen::Matrix2d c;
+    c << cov(n, n), cov(n, ns + n), cov(ns + n, n), cov(ns + n, ns + n);
+    c *= ws * ws;
+    m.std_real = std::sqrt(std::max(c(0, 0), 0.0));
+    m.std_imag = std::sqrt(std::max(c(1, 1), 0.0));
+    const double sr = m.eigenvalue.real(), si = m.eigenvalue.imag(), mag = std::abs(m.eigenvalue);
+    if (mag <= 0.0) continue;
+    const Eigen::Vector2d d_wn(sr / mag, si / mag);
+    const Eigen::Vector2d d_zeta(-si * si / (mag * mag * mag), sr * si / (mag * mag * mag));
+    m.std_natural_frequency = std::sqrt(std::max(d_wn.dot(c * d_wn), 0.0));
+    m.std_damping_ratio = std::sqrt(std::max(d_zeta.dot(c * d_zeta), 0.0));
+  }
+}
 }  // namespace
 
 std::vector<int> FindPeaks(const Eigen::VectorXd& magnitude, double tolerance) {
@@ -205,64 +318,104 @@ PoleResidueResult FitPoleResidue(const Frf& frf, const PoleResidueOptions& optio
         s(n) = Complex(-0.2 * band, end);
     }
   }
-  // Residues and h_o by linear least squares given s, Eq. (35) (real unknowns).
-  const int lin = 2 * ns + (options.origin_correction ? 2 : 0);
-  Eigen::MatrixXd L(2 * lines, lin);
-  Eigen::VectorXd y(2 * lines);
-  for (int k = 0; k < lines; ++k) {
-    auto put = [&](int col, Complex d) {
-      L(k, col) = w(k) * d.real();
-      L(lines + k, col) = w(k) * d.imag();
-    };
-    for (int n = 0; n < ns; ++n) {
-      Complex re = 1.0 / (p(k) - s(n)), im = kI / (p(k) - s(n));
-      if (options.conjugate_pairs) {
-        re += 1.0 / (p(k) - std::conj(s(n)));
-        im += -kI / (p(k) - std::conj(s(n)));
+  Eigen::VectorXd x = LinearResidues(p, g, w, s, options);
+  for (int n = 0; n < ns; ++n)
+    result.initial_modes.push_back(MakeMode(s(n), Complex(x(2 * ns + n), x(3 * ns + n)), ws, fictitious[n]));
+  Refinement run = Refine(p, g, w, x, options);
+  result.iterations = run.iterations;
+  result.function_evaluations = run.function_evaluations;
+
+  // Poles the peaks missed: a resonance left in the residual (a peak at the band's edge, a
+  // close pair whose sum shows one hump). At the residual's largest local maxima (3-line
+  // smoothing as in `peaks`, at least 5 lines apart, largest first) a pole is started from the
+  // 5-point estimate (29)–(31) on the residual — and, when that run does not converge, also
+  // from a pole two line spacings wide at the line — and all poles are refitted. The first
+  // candidate whose pole lies in the band, is wider than one line spacing (narrower ones fit
+  // single noisy lines) and lowers the BIC N·ln(cost/N) + P·ln N (N real equations, P real
+  // unknowns) is kept; the BIC assumes the weights whiten the noise (w_k = 1/σ_k).
+  std::vector<bool> from_residual(ns, false);
+  double signal = 0.0;
+  for (int k = 0; k < lines; ++k) signal += w(k) * w(k) * std::norm(g(k));
+  const int equations = 2 * lines;
+  const double spacing = p(1).imag() - p(0).imag(), band = p(lines - 1).imag() - p(0).imag();
+  auto bic = [&](double cost, int poles) {
+    const int unknowns = 4 * poles + (options.origin_correction ? 2 : 0);
+    return equations * std::log(std::max(cost, 1e-300) / equations) + unknowns * std::log(double(equations));
+  };
+  for (int added = 0; added < options.max_residual_poles && lines >= 7 && Converged(run.status); ++added) {
+    if (!(run.cost > 1e-12 * signal)) break;  // already exact to 1e-6 relative
+    const int poles = static_cast<int>(x.size() - 2) / 4;
+    if (equations < 4 * (poles + 1) + (options.origin_correction ? 2 : 0)) break;
+    const Functor f(p, g, w, poles, options.conjugate_pairs, options.origin_correction);
+    Eigen::VectorXcd residual(lines);
+    Eigen::VectorXd power(lines);
+    for (int k = 0; k < lines; ++k) residual(k) = g(k) - f.Model(x, k);
+    for (int k = 0; k < lines; ++k) power(k) = w(k) * w(k) * std::norm(residual(k));
+    std::vector<std::pair<double, int>> maxima;
+    for (int k = 2; k < lines - 2; ++k) {
+      auto smooth = [&](int i) { return power(i - 1) + 3.0 * power(i) + power(i + 1); };
+      if (smooth(k) >= smooth(k - 1) && smooth(k) >= smooth(k + 1)) maxima.push_back({smooth(k), k});
+    }
+    std::sort(maxima.rbegin(), maxima.rend());
+    std::vector<int> candidates;
+    for (const auto& m : maxima) {
+      bool apart = true;
+      for (int c : candidates) apart &= std::abs(c - m.second) >= 5;
+      if (apart) candidates.push_back(m.second);
+      if (candidates.size() == 2) break;
+    }
+    bool accepted = false;
+    for (int top : candidates) {
+      Complex est = FivePointEstimate(p, residual, top - 2, p(top));
+      if (!std::isfinite(est.real()) || !std::isfinite(est.imag()) || std::abs(est.imag() - p(top).imag()) > 0.1 * band)
+        est = Complex(-2.0 * spacing, p(top).imag());
+      // The 5-point start; when its run does not converge, also the fixed one, and the lower
+      // cost of the two.
+      Refinement best;
+      best.cost = INFINITY;
+      for (const Complex start : {Complex(-std::max(std::abs(est.real()), spacing), est.imag()),
+                                  Complex(-2.0 * spacing, p(top).imag())}) {
+        Eigen::VectorXcd s_try(poles + 1);
+        for (int n = 0; n < poles; ++n) s_try(n) = Complex(x(n), x(poles + n));
+        s_try(poles) = start;
+        Refinement trial = Refine(p, g, w, LinearResidues(p, g, w, s_try, options), options);
+        result.iterations += trial.iterations;
+        result.function_evaluations += trial.function_evaluations;
+        if (trial.x.allFinite() && trial.cost < best.cost) best = trial;
+        if (Converged(trial.status) && trial.x.allFinite()) break;
       }
-      put(n, re);
-      put(ns + n, im);
+      if (!std::isfinite(best.cost)) continue;
+      const double width = std::abs(best.x(poles)), at = best.x(2 * (poles + 1) - 1);
+      accepted = width >= spacing && at >= p(0).imag() && at <= p(lines - 1).imag() &&
+                 bic(best.cost, poles + 1) < bic(run.cost, poles);
+      if (accepted) {
+        x = best.x;
+        run = best;
+      }
+      if (accepted) break;
     }
-    if (options.origin_correction) {
-      put(2 * ns, 1.0);
-      put(2 * ns + 1, kI);
-    }
-    y(k) = w(k) * g(k).real();
-    y(lines + k) = w(k) * g(k).imag();
+    if (!accepted) break;
+    fictitious.push_back(false);
+    from_residual.resize(poles, false);
+    from_residual.push_back(true);
+    ++result.residual_poles;
   }
-  const Eigen::VectorXd c = L.colPivHouseholderQr().solve(y);
-  Eigen::VectorXd x(4 * ns + 2);
-  x.setZero();
-  for (int n = 0; n < ns; ++n) {
-    x(n) = s(n).real();
-    x(ns + n) = s(n).imag();
-    x(2 * ns + n) = c(n);
-    x(3 * ns + n) = c(ns + n);
-    result.initial_modes.push_back(MakeMode(s(n), Complex(c(n), c(ns + n)), ws, fictitious[n]));
-  }
-  if (options.origin_correction) {
-    x(4 * ns) = c(2 * ns);
-    x(4 * ns + 1) = c(2 * ns + 1);
-  }
-
-  Functor functor(p, g, w, ns, options.conjugate_pairs, options.origin_correction);
-  Eigen::LevenbergMarquardt<Functor> lm(functor);
-  lm.setMaxfev(options.max_function_evaluations);
-  lm.setFtol(options.tolerance);
-  lm.setXtol(options.tolerance);
-  const auto status = lm.minimize(x);
+  x = run.x;
+  const int poles = static_cast<int>(x.size() - 2) / 4;
+  from_residual.resize(poles, false);
+  const auto status = run.status;
   result.lm_status = static_cast<int>(status);
-  result.iterations = static_cast<int>(lm.iterations());
-  result.function_evaluations = static_cast<int>(lm.nfev());
+  Functor functor(p, g, w, poles, options.conjugate_pairs, options.origin_correction);
 
-  for (int n = 0; n < ns; ++n) {
-    const Complex sn(-std::abs(x(n)), x(ns + n));  // s = −|Re s| + i Im s (`ideSISO`)
-    result.modes.push_back(MakeMode(sn, Complex(x(2 * ns + n), x(3 * ns + n)), ws, fictitious[n]));
-    x(n) = sn.real();
+  for (int n = 0; n < poles; ++n) {  // Re s <= 0 already (Refine)
+    result.modes.push_back(MakeMode(Complex(x(n), x(poles + n)), Complex(x(2 * poles + n), x(3 * poles + n)), ws,
+                                    fictitious[n]));
+    result.modes.back().from_residual = from_residual[n];
   }
+  AttachStandardErrors(functor, x, ws, options.origin_correction, &result.modes);
   std::sort(result.modes.begin(), result.modes.end(),
             [](const Mode& a, const Mode& b) { return a.eigenvalue.imag() < b.eigenvalue.imag(); });
-  result.origin_correction = options.origin_correction ? Complex(x(4 * ns), x(4 * ns + 1)) : Complex(0.0);
+  result.origin_correction = options.origin_correction ? Complex(x(4 * poles), x(4 * poles + 1)) : Complex(0.0);
   result.fitted.resize(lines);
   for (int k = 0; k < lines; ++k) result.fitted(k) = functor.Model(x, k);
   double cost = 0.0, gn = 0.0, rn = 0.0;
@@ -286,8 +439,9 @@ PoleResidueResult FitPoleResidue(const Frf& frf, const PoleResidueOptions& optio
     result.message = "Levenberg-Marquardt rejected its input";
   } else {
     result.status = SolverStatus::kOk;
-    result.message = std::to_string(ns) + " poles (" + std::to_string(result.peak_lines.size()) +
-                     " peaks" + (options.fictitious_poles ? " + 2 fictitious" : "") + ")";
+    result.message = std::to_string(poles) + " poles (" + std::to_string(result.peak_lines.size()) + " peaks" +
+                     (options.fictitious_poles ? " + 2 fictitious" : "") +
+                     (result.residual_poles ? " + " + std::to_string(result.residual_poles) + " from the residual" : "") + ")";
   }
   return result;
 }

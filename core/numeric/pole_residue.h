@@ -17,6 +17,7 @@
 // With conjugate_pairs (default) every term a/(p − s) comes with conj(a)/(p − conj s), i.e. a
 // real system; conjugate_pairs = false fits (26) exactly as printed (complex terms only).
 #include <Eigen/Dense>
+#include <cmath>
 #include <complex>
 #include <vector>
 
@@ -33,7 +34,10 @@ struct PoleResidueOptions {
   bool conjugate_pairs = true;
   bool origin_correction = true;     // h_o
   Eigen::VectorXd weights;           // measurement weights w_k > 0 (empty: 1); Balda uses w = f
-  int max_function_evaluations = 4000;
+  // Poles the peaks missed, added one at a time from the residual's largest resonance while
+  // the BIC falls (0: the peaks and the fictitious poles only, as in `ideSISO`).
+  int max_residual_poles = 2;
+  int max_function_evaluations = 4000;   // per Levenberg–Marquardt run
   double tolerance = 1e-12;          // LM ftol = xtol
 };
 
@@ -44,6 +48,15 @@ struct Mode {
   double damping_ratio = 0.0;        // ζ = −Re s/|s|
   double q = 0.0;                    // Q = |s|/(−2 Re s) = 1/(2ζ)
   bool fictitious = false;           // started as an out-of-band correction pole
+  bool from_residual = false;        // added from the residual (max_residual_poles)
+  // Standard errors from the Jacobian at the optimum, Cov = σ̂²·(JᵀJ)⁺ with
+  // σ̂² = cost/(2L − P) (weighted residuals, L lines, P real parameters). With weights
+  // w_k = 1/σ_k (the noise's standard deviation per line) this is the Cramér–Rao bound
+  // evaluated at the estimate; NaN when the fit has no spare equations.
+  double std_real = NAN;              // of Re s [rad/s]
+  double std_imag = NAN;              // of Im s [rad/s]
+  double std_natural_frequency = NAN; // of ω_n (first-order propagation)
+  double std_damping_ratio = NAN;     // of ζ
 };
 
 struct PoleResidueResult : ResultBase {
@@ -53,6 +66,7 @@ struct PoleResidueResult : ResultBase {
   std::vector<Mode> initial_modes;   // the 5-point estimates (29)–(31)
   Eigen::VectorXcd fitted;           // model on the FRF lines
   int function_evaluations = 0;
+  int residual_poles = 0;            // poles added from the residual
   int lm_status = 0;                 // Eigen::LevenbergMarquardtSpace::Status
 };
 

@@ -38,7 +38,8 @@ printf('octave invfreqs on the bias file (seed 1): max pole error %.4g; with ite
 OCT
 octave-cli -q "$dir/run.m" 2>&1 | grep -v "^warning: \|^warning: called from\|^    \|execution_exception"
 
-echo "== pole-residue on Balda's table"
+echo "== pole-residue on Balda's table: Cramer-Rao bound (Octave), then the fits"
+octave-cli -q "$(dirname "$0")/pole_residue_crb.m" 2>&1 | grep -v "execution_exception"
 "$bench" balda
 echo "== real data"
 "$bench" real "${2:-$(cd "$(dirname "$0")/../../.." && pwd)/shared}"
