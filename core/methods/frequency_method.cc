@@ -124,7 +124,11 @@ Frf SisoElement(const Frf& frf, const json& o, Eigen::VectorXd* weights) {
     if (weight == "f") wt(i) = w(i) / (2 * kPi);
     else if (weight == "inverse_magnitude") {
       if (!(std::abs(h(i)) > 0.0))
-        throw std::invalid_argument("weight=inverse_magnitude: |H| is 0 at " + std::to_string(w(i) / (2 * kPi)) + " Hz");
+      {
+        std::ostringstream m;
+        m << "weight=inverse_magnitude: |H| is 0 at " << w(i) / (2 * kPi) << " Hz";
+        throw std::invalid_argument(m.str());
+      }
       wt(i) = 1.0 / std::abs(h(i));
     }
     else if (weight == "inverse_std") {

@@ -36,6 +36,20 @@ awk '$1 ~ /^[0-9]+$/ && NF >= 6 { if ($2 > -0.2001 && $2 < -0.1999 && $3 > 9.997
   if ($2 > -0.5001 && $2 < -0.4999 && $3 > 24.9949 && $3 < 24.9951) b = 1 }
   END { exit (a && b ? 0 : 1) }' "$dir/modes.txt"
 "$idrig" identify --method pole-residue --data "$dir/modes.csv" --json | grep -q '"damping_ratio"'
+# Noise relative to |H| (1 %, awk's rand with a fixed seed): weights 1/|H|; every mode comes
+# with standard errors, and they cover the truth (|error| < 4 std) for the two real modes.
+awk -F, 'BEGIN { srand(7) } NR == 1 { print; next }
+  { m = sqrt($2 * $2 + $3 * $3); u1 = rand(); u2 = rand(); r = sqrt(-2 * log(u1 + 1e-300)) * 0.01 * m / sqrt(2)
+    printf "%s,%.17g,%.17g\n", $1, $2 + r * cos(6.283185307179586 * u2), $3 + r * sin(6.283185307179586 * u2) }' \
+  "$dir/modes.csv" > "$dir/noisy.csv"
+"$idrig" identify --method pole-residue --data "$dir/noisy.csv" --option weight=inverse_magnitude --json > "$dir/noisy.json"
+jq -e '[.identification.details.modes[] | select(.fictitious | not)] | length == 2' "$dir/noisy.json" > /dev/null
+jq -e '[.identification.details.modes[] | select(.fictitious | not) | .std.real > 0 and .std.imag > 0 and .std.damping_ratio > 0] | all' \
+  "$dir/noisy.json" > /dev/null
+jq -e '[.identification.details.modes[] | select(.fictitious | not)
+        | (.eigenvalue[0] - (if .eigenvalue[1] < 15 then -0.2 else -0.5 end)) / .std.real | fabs < 4] | all' \
+  "$dir/noisy.json" > /dev/null
+"$idrig" identify --method pole-residue --data "$dir/noisy.csv" --option max_residual_poles=0 | grep -q "4 poles (2 peaks + 2 fictitious)"
 
 # 2-DOF receptance matrix: M = diag(1, 2), K = [30 -10; -10 20], B = 0.01 K.
 awk 'BEGIN { print "f_hz,re_1_1,im_1_1,re_2_1,im_2_1,re_1_2,im_1_2,re_2_2,im_2_2"; pi = 3.141592653589793
@@ -72,4 +86,17 @@ set +e
 out=$("$idrig" identify --method mbk --data "$dir/plant.csv" --option variant=sum 2>&1); rc=$?
 set -e
 [ $rc -eq 2 ] && grep -q "product or difference" <<<"$out"
+set +e
+out=$("$idrig" identify --method pole-residue --data "$dir/modes.csv" --option max_residual_poles=-1 2>&1); rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "max_residual_poles' must be >= 0" <<<"$out"
+set +e
+out=$("$idrig" identify --method pole-residue --data "$dir/modes.csv" --option weight=relative 2>&1); rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "inverse_magnitude" <<<"$out"
+printf 'f_hz,re,im\n1,1,0\n2,0,0\n3,1,1\n4,1,2\n5,1,3\n6,2,1\n7,1,1\n' > "$dir/zero.csv"
+set +e
+out=$("$idrig" identify --method pole-residue --data "$dir/zero.csv" --option weight=inverse_magnitude 2>&1); rc=$?
+set -e
+[ $rc -eq 2 ] && grep -q "|H| is 0 at 2 Hz" <<<"$out"
 echo "cli.frequency_methods: ok"
