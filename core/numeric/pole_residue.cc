@@ -318,10 +318,10 @@ PoleResidueResult FitPoleResidue(const Frf& frf, const PoleResidueOptions& optio
         s(n) = Complex(-0.2 * band, end);
     }
   }
-  Eigen::VectorXd x = LinearResidues(p, g, w, s, options);
+  const Eigen::VectorXd x0 = LinearResidues(p, g, w, s, options);
   for (int n = 0; n < ns; ++n)
-    result.initial_modes.push_back(MakeMode(s(n), Complex(x(2 * ns + n), x(3 * ns + n)), ws, fictitious[n]));
-  Refinement run = Refine(p, g, w, x, options);
+    result.initial_modes.push_back(MakeMode(s(n), Complex(x0(2 * ns + n), x0(3 * ns + n)), ws, fictitious[n]));
+  Refinement run = Refine(p, g, w, x0, options);
   result.iterations = run.iterations;
   result.function_evaluations = run.function_evaluations;
 
@@ -344,6 +344,7 @@ PoleResidueResult FitPoleResidue(const Frf& frf, const PoleResidueOptions& optio
   };
   for (int added = 0; added < options.max_residual_poles && lines >= 7 && Converged(run.status); ++added) {
     if (!(run.cost > 1e-12 * signal)) break;  // already exact to 1e-6 relative
+    const Eigen::VectorXd& x = run.x;
     const int poles = static_cast<int>(x.size() - 2) / 4;
     if (equations < 4 * (poles + 1) + (options.origin_correction ? 2 : 0)) break;
     const Functor f(p, g, w, poles, options.conjugate_pairs, options.origin_correction);
@@ -389,20 +390,17 @@ PoleResidueResult FitPoleResidue(const Frf& frf, const PoleResidueOptions& optio
       accepted = width >= spacing && at >= p(0).imag() && at <= p(lines - 1).imag() &&
                  bic(best.cost, poles + 1) < bic(run.cost, poles);
       if (accepted) {
-        x = best.x;
-        run = best;
+        run = best;  // x refers to run.x: nothing below in this step reads it
+        break;
       }
-      if (accepted) break;
     }
     if (!accepted) break;
     fictitious.push_back(false);
-    from_residual.resize(poles, false);
     from_residual.push_back(true);
     ++result.residual_poles;
   }
-  x = run.x;
+  Eigen::VectorXd x = run.x;
   const int poles = static_cast<int>(x.size() - 2) / 4;
-  from_residual.resize(poles, false);
   const auto status = run.status;
   result.lm_status = static_cast<int>(status);
   Functor functor(p, g, w, poles, options.conjugate_pairs, options.origin_correction);
