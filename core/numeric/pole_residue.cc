@@ -416,13 +416,12 @@ PoleResidueResult FitPoleResidue(const Frf& frf, const PoleResidueOptions& optio
   result.origin_correction = options.origin_correction ? Complex(x(4 * poles), x(4 * poles + 1)) : Complex(0.0);
   result.fitted.resize(lines);
   for (int k = 0; k < lines; ++k) result.fitted(k) = functor.Model(x, k);
-  double cost = 0.0, gn = 0.0, rn = 0.0;
+  double gn = 0.0, rn = 0.0;
   for (int k = 0; k < lines; ++k) {
-    cost += w(k) * w(k) * std::norm(result.fitted(k) - g(k));
     rn += std::norm(result.fitted(k) - g(k));
     gn += std::norm(g(k));
   }
-  result.final_cost = cost;
+  result.final_cost = run.cost;  // Σ w²|model − g|² at this x (Refine)
   result.fit_percent = gn > 0.0 ? 100.0 * (1.0 - std::sqrt(rn / gn)) : 0.0;
   using namespace Eigen::LevenbergMarquardtSpace;
   if (!x.allFinite()) {
