@@ -5,7 +5,7 @@
 #include <stdexcept>
 
 #include "core/io/model_json.h"
-#include "core/numeric/lti_model.h"
+#include "core/numeric/model/lti_model.h"
 
 namespace idrig {
 

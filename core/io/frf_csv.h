@@ -7,7 +7,7 @@
 // rad/s (Frf::omega). A file whose first header field is `t` is a time record (csv.h).
 #include <string>
 
-#include "core/numeric/frf.h"
+#include "core/numeric/signal/frf.h"
 
 namespace idrig {
 

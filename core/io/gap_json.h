@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/numeric/gap_diagnosis.h"
+#include "core/numeric/gap/gap_diagnosis.h"
 
 namespace idrig {
 

@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/numeric/lti_model.h"
+#include "core/numeric/model/lti_model.h"
 
 namespace idrig {
 

@@ -4,7 +4,7 @@
 
 #include "core/io/model_json.h"
 #include "core/methods/registry.h"
-#include "core/numeric/arx.h"
+#include "core/numeric/time_domain/arx.h"
 
 namespace idrig {
 namespace {

@@ -12,7 +12,7 @@
 
 #include "core/io/model_json.h"
 #include "core/methods/registry.h"
-#include "core/numeric/finite_frequency.h"
+#include "core/numeric/finite_frequency/finite_frequency.h"
 
 namespace idrig {
 namespace {

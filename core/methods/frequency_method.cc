@@ -17,9 +17,9 @@
 #include "core/io/frf_csv.h"
 #include "core/io/model_json.h"
 #include "core/methods/registry.h"
-#include "core/numeric/mbk.h"
-#include "core/numeric/pole_residue.h"
-#include "core/numeric/stable_nls.h"
+#include "core/numeric/frequency_domain/mbk.h"
+#include "core/numeric/frequency_domain/pole_residue.h"
+#include "core/numeric/frequency_domain/stable_nls.h"
 
 namespace idrig {
 namespace {

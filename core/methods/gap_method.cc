@@ -9,7 +9,7 @@
 #include "core/io/gap_json.h"
 #include "core/io/model_json.h"
 #include "core/methods/registry.h"
-#include "core/numeric/gap_diagnosis.h"
+#include "core/numeric/gap/gap_diagnosis.h"
 
 namespace idrig {
 namespace {

@@ -17,8 +17,8 @@
 
 #include "core/io/model_json.h"
 #include "core/methods/registry.h"
-#include "core/numeric/modal_polyref.h"
-#include "core/numeric/step_prony.h"
+#include "core/numeric/time_domain/modal_polyref.h"
+#include "core/numeric/time_domain/step_prony.h"
 #include "core/numeric/validation.h"
 
 namespace idrig {

@@ -1,6 +1,6 @@
 #pragma once
 // idrig-excite: takes experiment requests, generates the excitation in real time with the
-// excitation library (core/numeric/excitation.h), publishes signed actuator commands in blocks
+// excitation library (core/numeric/signal/excitation.h), publishes signed actuator commands in blocks
 // of block_samples samples, and publishes experiment status (IDRIG/<rig>/EXP_STATUS).
 // Limits are checked before anything moves (AcceptExcitation); the rig checks them again.
 #include <deque>
@@ -13,7 +13,7 @@
 #include <set>
 #include <string>
 
-#include "core/numeric/excitation.h"
+#include "core/numeric/signal/excitation.h"
 #include "core/transport/signing.h"
 #include "core/transport/status.h"
 #include "core/transport/transport.h"

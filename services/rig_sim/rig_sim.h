@@ -15,8 +15,8 @@
 #include <random>
 #include <string>
 
-#include "core/numeric/effects.h"
-#include "core/numeric/lti_model.h"
+#include "core/numeric/gap/effects.h"
+#include "core/numeric/model/lti_model.h"
 #include "core/transport/signing.h"
 #include "core/transport/status.h"
 #include "core/transport/transport.h"

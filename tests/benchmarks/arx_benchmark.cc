@@ -9,7 +9,7 @@
 
 #include <random>
 
-#include "core/numeric/arx.h"
+#include "core/numeric/time_domain/arx.h"
 
 namespace {
 

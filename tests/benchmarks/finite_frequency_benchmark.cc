@@ -13,8 +13,8 @@
 #include <cstring>
 #include <string>
 
-#include "core/numeric/finite_frequency.h"
-#include "core/numeric/sine_experiment.h"
+#include "core/numeric/finite_frequency/finite_frequency.h"
+#include "core/numeric/finite_frequency/sine_experiment.h"
 
 namespace {
 

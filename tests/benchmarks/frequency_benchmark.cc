@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "core/io/frf_csv.h"
-#include "core/numeric/pole_residue.h"
-#include "core/numeric/stable_nls.h"
+#include "core/numeric/frequency_domain/pole_residue.h"
+#include "core/numeric/frequency_domain/stable_nls.h"
 
 namespace {
 

@@ -6,8 +6,8 @@
 
 #include <random>
 
-#include "core/numeric/gap_bench.h"
-#include "core/numeric/gap_diagnosis.h"
+#include "core/numeric/gap/gap_bench.h"
+#include "core/numeric/gap/gap_diagnosis.h"
 
 namespace {
 

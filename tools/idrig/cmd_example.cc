@@ -6,7 +6,7 @@
 
 #include "core/io/csv.h"
 #include "core/io/model_json.h"
-#include "core/numeric/excitation.h"
+#include "core/numeric/signal/excitation.h"
 #include "tools/idrig/commands.h"
 
 namespace idrig {

@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "core/numeric/excitation.h"
+#include "core/numeric/signal/excitation.h"
 #include "tools/idrig/commands.h"
 
 namespace idrig {

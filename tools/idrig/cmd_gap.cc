@@ -19,8 +19,8 @@
 #include "core/io/gap_json.h"
 #include "core/io/gap_svg.h"
 #include "core/io/model_json.h"
-#include "core/numeric/gap_bench.h"
-#include "core/numeric/gap_diagnosis.h"
+#include "core/numeric/gap/gap_bench.h"
+#include "core/numeric/gap/gap_diagnosis.h"
 #include "tools/idrig/commands.h"
 
 namespace idrig {

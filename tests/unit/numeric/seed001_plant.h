@@ -3,7 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 
-#include "core/numeric/lti_model.h"
+#include "core/numeric/model/lti_model.h"
 
 namespace idrig::testing {
 

@@ -1,0 +1,114 @@
+#pragma once
+// The effect library: unmodelled effects that make a rig depart from its linear simulation
+// model G0 (input u, output y). Shared by the rig simulator (which adds an effect to a plant)
+// and the sim-to-real gap diagnosis (which fits every effect to measured records).
+//
+// Each effect augments a continuous SISO plant G0(s) = num(s)/den(s) with 0–4 parameters:
+//
+//   name                   parameters (units of u, y, s)      model
+//   none                   —                                  y = G0 u
+//   parameter_mismatch     —  (the plant's coefficients move)  y = G0' u
+//   time_delay             tau_s                              y = G0 u(t − τ)
+//   actuator_lag           T_s                                y = G0/(T s + 1) u
+//   unmodelled_resonance   omega_rad_s, zeta                  y = G0 ω²/(s² + 2ζωs + ω²) u
+//   input_saturation       u_lo, u_hi                         y = G0 clip(u, u_lo, u_hi)
+//   dead_zone              d                                  u_eff = sign(u)·max(|u| − d, 0)
+//   backlash               r                                  w = max(u − r, min(u + r, w_prev))
+//   coulomb_friction       F_c                                u_eff = u − F_c·sign(dy/dt)
+//   cubic_stiffness        k3                                 u_eff = u − k3·y³
+//   output_saturation      y_lo, y_hi                         y_m = clip(y, y_lo, y_hi)
+//   sensor_nonlinearity    a1, a2, a3, absolute               y_m = a1 y + a2 y² + a3 y³,
+//                                                             or a1·|y| when absolute != 0
+//   output_quantization    q                                  y_m = q·round(y/q)
+//
+// Simulation is sampled with a zero-order hold on u at Ts; the feedback effects (friction,
+// cubic stiffness) are integrated with `substeps` ZOH sub-steps per sample, dy/dt taken from
+// the continuous state (C A x + C B u_eff). Everything here is Eigen-only and I/O-free.
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "core/numeric/model/lti_model.h"
+
+namespace idrig {
+
+enum class EffectKind {
+  kNone,
+  kParameterMismatch,
+  kTimeDelay,
+  kActuatorLag,
+  kUnmodelledResonance,
+  kInputSaturation,
+  kDeadZone,
+  kBacklash,
+  kCoulombFriction,
+  kCubicStiffness,
+  kOutputSaturation,
+  kSensorNonlinearity,
+  kOutputQuantization,
+};
+
+// The fixed vocabulary, in the order above.
+const std::vector<EffectKind>& AllEffects();
+const char* EffectName(EffectKind kind);
+// Throws std::invalid_argument listing the names when `name` is unknown.
+EffectKind EffectFromName(const std::string& name);
+// Parameter names of an effect, in the order of Effect::params.
+const std::vector<std::string>& EffectParameterNames(EffectKind kind);
+// Effects acting on the plant's input, on its output, or in feedback around it.
+bool IsLinearEffect(EffectKind kind);    // time_delay, actuator_lag, unmodelled_resonance
+bool IsFeedbackEffect(EffectKind kind);  // coulomb_friction, cubic_stiffness
+
+struct Effect {
+  EffectKind kind = EffectKind::kNone;
+  std::vector<double> params;  // EffectParameterNames(kind) order
+};
+
+// Throws std::invalid_argument naming the problem (wrong count, NaN, negative width, …).
+void ValidateEffect(const Effect& effect);
+
+// G0 with a linear effect folded in (delay, lag or resonance); other effects return G0.
+TransferFunction ApplyLinearEffect(const TransferFunction& plant, const Effect& effect);
+
+struct EffectSimulationOptions {
+  int substeps = 4;  // ZOH sub-steps per sample for the feedback effects
+};
+
+// Sample-by-sample simulation of the plant with the effect (the rig simulator's core): Step(u_k)
+// returns y_k and advances one sample. Starts at rest.
+class EffectSimulator {
+ public:
+  // Throws std::invalid_argument for a discrete plant, bad parameters or sample time.
+  EffectSimulator(const TransferFunction& plant, const Effect& effect, double sample_time,
+                  const EffectSimulationOptions& options = {});
+  double Step(double u);
+  void Reset();
+  const Effect& effect() const { return effect_; }
+
+ private:
+  Effect effect_;
+  bool feedback_ = false;
+  int substeps_ = 1;
+  Eigen::MatrixXd A_;
+  Eigen::VectorXd B_, x_, next_;
+  Eigen::RowVectorXd C_, velocity_row_;
+  double D_ = 0.0, velocity_input_ = 0.0;
+  long delay_ = 0;
+  std::vector<double> delay_line_;
+  long delay_head_ = 0;
+  double backlash_ = 0.0;
+};
+
+// Output of the plant with the effect for input samples u (Ts apart, plant at rest at k = 0).
+// `plant` must be continuous. Throws std::invalid_argument on bad sizes or parameters.
+Eigen::VectorXd SimulateWithEffect(const TransferFunction& plant, const Effect& effect,
+                                   const Eigen::VectorXd& u, double sample_time,
+                                   const EffectSimulationOptions& options = {});
+
+// The static and hysteretic maps, exposed for tests and for the diagnosis's signatures.
+double DeadZone(double u, double width);
+// Play operator of half-width r over a whole sequence, starting from w = clip(0, u0 ± r).
+Eigen::VectorXd Backlash(const Eigen::VectorXd& u, double half_width);
+double SensorMap(double y, const std::vector<double>& params);  // sensor_nonlinearity
+
+}  // namespace idrig

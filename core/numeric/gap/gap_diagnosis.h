@@ -1,0 +1,147 @@
+#pragma once
+// Sim-to-real gap diagnosis: where a linear simulation model G0 departs from measured records,
+// which unmodelled effect of the library (effects.h) causes it, and how far the gap shrinks on
+// held-out validation records once that effect is added.
+//
+// Which (attribution): every effect is fitted by output-error simulation on the estimation
+// records, with G0's coefficients free to move inside G0's structure (log multipliers on the
+// non-zero coefficients of num and the monic den), by Levenberg–Marquardt (Eigen's MINPACK
+// port) from a few starting points per effect. Candidates are ranked on the validation records
+// by BIC, J = N_val·ln V_val + k·ln N_est (k fitted parameters), turned into weights
+// w ∝ exp(−J/2). An effect may win only when (a) its likelihood ratio against the refitted G0
+// on the estimation data, N ln(V_refit/V_effect), exceeds the χ²_k quantile at the
+// Bonferroni-corrected level, and (b) the change it makes to the simulation correlates with the
+// measured gap (signature check). `none` wins when the refitted G0 does not significantly beat
+// G0 itself. `ambiguous` when the top two BIC values differ by less than `ambiguity_bic`.
+//
+// Where (localisation, gap_where.cc): gap against the noise floor, model-error spectrum by band
+// with input–residual coherence, residual by input amplitude, by state (velocity sign, near
+// reversals, output level) and by time.
+//
+// Sizes: records are SISO, u and y of equal length, one sample time for all records.
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "core/numeric/gap/effects.h"
+#include "core/numeric/io_record.h"
+#include "core/numeric/model/lti_model.h"
+
+namespace idrig {
+
+struct GapRecord {
+  Eigen::VectorXd u, y;
+  double sample_time = 0.0;
+  // Samples before `score_from` drive the simulation (warm-up) but are not scored: used when
+  // a validation record is the second half of a record whose first half is for estimation.
+  int score_from = 0;
+};
+
+struct GapOptions {
+  double significance = 0.01;    // family-wise level of the likelihood-ratio tests
+  double ambiguity_bic = 2.0;    // top two closer than this in BIC → "ambiguous"
+  double min_signature = 0.2;    // correlation of the effect's change with the measured gap
+  int substeps = 4;              // sub-steps for friction and cubic stiffness
+  int evaluations_per_start = 10;   // LM budget per start, ×(parameters + 1)
+  int evaluations_polish = 80;      // LM budget for the best start, ×(parameters + 1)
+  std::vector<EffectKind> candidates;  // empty: every effect of the library
+  int threads = 0;               // candidates fitted in parallel; 0: one per hardware thread
+};
+
+struct BandGap {
+  double f_lo_hz = 0, f_hi_hz = 0;
+  double gap_power = 0;          // residual power in the band (per Hz, mean)
+  double coherence = 0;          // mean |γ_ue|² over the band
+  double coherence_threshold = 0;  // 99.9 % level for no correlation, Beta(1, L−1)
+  double relative_error = 0;     // median |Ê(jω)/G0(jω)|, Ê = S_ue/S_uu the model-error FRF
+  bool significant = false;
+  double nrmse_before = 0, nrmse_after = 0;  // of the band-passed validation output
+};
+
+struct BinnedGap {
+  std::string label;             // e.g. "|u| in [0.1, 0.4)"
+  int samples = 0;
+  double mean = 0, rms = 0;      // of the residual y − ŷ0 in the bin
+  double relative_rms = 0;       // rms / RMS(ŷ0) in the bin: the gap relative to the signal
+};
+
+struct GapFactor {
+  std::string name;              // "amplitude", "velocity_sign", "reversal", "output_level", "time"
+  std::vector<BinnedGap> bins;
+  double eta_squared = 0;        // share of residual variance explained by the bin means
+  double rms_ratio = 0;          // largest bin RMS / smallest bin RMS
+  double relative_ratio = 0;     // largest bin relative_rms / smallest
+};
+
+struct GapWhere {
+  double nrmse_before = 0;       // G0 on all records, simulation NRMSE
+  double noise_nrmse = 0;        // noise floor as NRMSE (from the best candidate's residual)
+  double gap_to_noise = 0;       // RMS(y − ŷ0) / σ̂
+  bool gap_significant = false;
+  bool residual_white = false, residual_independent = false;  // tests on y − ŷ0
+  std::vector<BandGap> bands;
+  std::vector<GapFactor> factors;
+  std::string summary;
+};
+
+struct CandidateFit {
+  Effect effect;                 // fitted effect parameters
+  TransferFunction plant;        // G0 after its coefficients were allowed to move
+  int parameters = 0;            // fitted parameters (plant + effect)
+  double estimation_mse = 0;
+  double validation_mse = 0;
+  double nrmse_after = 0;        // validation simulation NRMSE
+  double bic = 0;                // validation BIC
+  double score = 0;              // BIC weight (sums to 1 over the ranking)
+  double likelihood_ratio = 0;   // against the refitted G0 (against G0 for parameter_mismatch)
+  double lr_threshold = 0;
+  bool significant = false;
+  double signature = 0;          // corr(ŷ_c − ŷ_0, y − ŷ_0) on validation data
+  bool eligible = false;         // may be the verdict
+  std::vector<double> param_std; // 1σ of effect parameters (linearised), NaN when unknown
+  int evaluations = 0;
+  std::string note;
+};
+
+struct GapVerdict {
+  std::string effect;            // an effect name, or "ambiguous"
+  std::vector<std::string> tied; // the two candidates when ambiguous
+  double confidence = 0;         // BIC weight of the verdict among all candidates
+  double nrmse_before = 0, nrmse_after = 0;  // validation records
+  double shrink = 0;             // (before − after)/(before − noise floor), in [0, 1] mostly
+  Effect params;
+  std::vector<double> param_std;
+  TransferFunction plant;        // the adjusted linear part
+  std::string explanation;
+};
+
+struct GapReport {
+  GapVerdict verdict;
+  std::vector<CandidateFit> ranking;  // best first
+  GapWhere where;
+  std::vector<std::string> notes;     // what was assumed (e.g. "split in time at 50 %")
+  int estimation_samples = 0, validation_samples = 0;
+};
+
+// Throws std::invalid_argument for: no records, NaN, mismatched lengths, a constant input,
+// differing sample times, records too short for the model's order, a discrete sim model whose
+// sample time differs from the data's.
+GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRecord>& estimation,
+                      const std::vector<GapRecord>& validation, const GapOptions& options = {});
+
+// Splits one record in time: the first half for estimation; the whole record for validation
+// with scoring from the midpoint (the first half only warms the simulation up).
+void SplitRecord(const GapRecord& record, std::vector<GapRecord>& estimation,
+                 std::vector<GapRecord>& validation);
+
+// Localisation only (also used by DiagnoseGap). `noise_sigma` ≤ 0: unknown, the residual's RMS
+// is used (so the gap is never called significant).
+GapWhere LocateGap(const TransferFunction& sim_model, const std::vector<GapRecord>& records,
+                   double noise_sigma);
+
+// The front ends' conversions: a SISO sim model (tf, or ss with one input and one output) as a
+// transfer function, and a SISO record (t,u,y). Throw std::invalid_argument for MIMO.
+TransferFunction SimModelTransferFunction(const LtiModel& model);
+GapRecord ToGapRecord(const IoRecord& record);
+
+}  // namespace idrig

@@ -1,0 +1,182 @@
+// The effect library against closed forms: static maps, the play operator, and the linear and
+// feedback effects on plants whose responses are known analytically.
+#include "core/numeric/gap/effects.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace idrig {
+namespace {
+
+TransferFunction FirstOrder(double gain, double pole) {  // gain·pole/(s + pole)
+  TransferFunction tf;
+  tf.num = Eigen::VectorXd::Constant(1, gain * pole);
+  tf.den = Eigen::Vector2d(1.0, pole);
+  return tf;
+}
+
+TEST(EffectsTest, VocabularyIsTheFixedThirteenNames) {
+  const std::vector<std::string> expected = {
+      "none", "parameter_mismatch", "time_delay", "actuator_lag", "unmodelled_resonance",
+      "input_saturation", "dead_zone", "backlash", "coulomb_friction", "cubic_stiffness",
+      "output_saturation", "sensor_nonlinearity", "output_quantization"};
+  ASSERT_EQ(AllEffects().size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_EQ(EffectName(AllEffects()[i]), expected[i]);
+    EXPECT_EQ(EffectFromName(expected[i]), AllEffects()[i]);
+  }
+}
+
+TEST(EffectsTest, StaticMaps) {
+  EXPECT_DOUBLE_EQ(DeadZone(0.3, 0.5), 0.0);
+  EXPECT_DOUBLE_EQ(DeadZone(-0.3, 0.5), 0.0);
+  EXPECT_DOUBLE_EQ(DeadZone(1.5, 0.5), 1.0);
+  EXPECT_DOUBLE_EQ(DeadZone(-2.0, 0.5), -1.5);
+  EXPECT_DOUBLE_EQ(SensorMap(2.0, {1.0, 0.5, 0.25, 0.0}), 2.0 + 0.5 * 4 + 0.25 * 8);
+  EXPECT_DOUBLE_EQ(SensorMap(-2.0, {3.0, 0.0, 0.0, 1.0}), 6.0);
+}
+
+TEST(EffectsTest, BacklashIsThePlayOperator) {
+  // Up to 1, back to 0.5, down to −1, back up: the output lags by the play 2r = 0.4.
+  Eigen::VectorXd u(7);
+  u << 0.0, 1.0, 0.5, 0.9, -1.0, 0.0, 1.0;
+  Eigen::VectorXd expected(7);
+  expected << 0.0, 0.8, 0.7, 0.7, -0.8, -0.2, 0.8;
+  EXPECT_TRUE(Backlash(u, 0.2).isApprox(expected, 1e-12)) << Backlash(u, 0.2).transpose();
+}
+
+TEST(EffectsTest, ActuatorLagMatchesTheClosedFormStepResponse) {
+  // 1/((s + 1)(T s + 1)) to a unit step: 1 − (e^(−t) − T e^(−t/T))/(1 − T); ZOH exact at samples.
+  const double lag = 0.3, ts = 0.05;
+  const int n = 200;
+  const Eigen::VectorXd u = Eigen::VectorXd::Ones(n);
+  const Eigen::VectorXd y =
+      SimulateWithEffect(FirstOrder(1.0, 1.0), {EffectKind::kActuatorLag, {lag}}, u, ts);
+  for (int k = 0; k < n; ++k) {
+    const double t = k * ts;
+    const double exact = 1 - (std::exp(-t) - lag * std::exp(-t / lag)) / (1 - lag);
+    EXPECT_NEAR(y(k), exact, 1e-12) << "k = " << k;
+  }
+}
+
+TEST(EffectsTest, TimeDelayShiftsTheResponse) {
+  const double ts = 0.1;
+  const int n = 100;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(n);
+  u.segment(10, 30).setOnes();
+  const Eigen::VectorXd plain = SimulateWithEffect(FirstOrder(2.0, 3.0), {}, u, ts);
+  const Eigen::VectorXd delayed =
+      SimulateWithEffect(FirstOrder(2.0, 3.0), {EffectKind::kTimeDelay, {0.7}}, u, ts);
+  EXPECT_TRUE(delayed.tail(n - 7).isApprox(plain.head(n - 7), 1e-12));
+  EXPECT_TRUE(delayed.head(7).isZero(0));
+  // A fractional delay of 0.25 Ts: first-order step response 2(1 − e^(−3(t − τ))) for t > τ.
+  const Eigen::VectorXd step =
+      SimulateWithEffect(FirstOrder(2.0, 3.0), {EffectKind::kTimeDelay, {0.025}}, Eigen::VectorXd::Ones(n), ts);
+  for (int k = 1; k < n; ++k) EXPECT_NEAR(step(k), 2 * (1 - std::exp(-3 * (k * ts - 0.025))), 1e-12);
+}
+
+TEST(EffectsTest, ResonanceKeepsTheStaticGainAndSaturationsClip) {
+  const int n = 4000;
+  const Eigen::VectorXd u = Eigen::VectorXd::Constant(n, 1.5);
+  const auto plant = FirstOrder(2.0, 1.0);
+  const Eigen::VectorXd y = SimulateWithEffect(plant, {EffectKind::kUnmodelledResonance, {20.0, 0.1}}, u, 0.01);
+  EXPECT_NEAR(y(n - 1), 3.0, 1e-9);
+  const Eigen::VectorXd clipped_in =
+      SimulateWithEffect(plant, {EffectKind::kInputSaturation, {-1.0, 1.0}}, u, 0.01);
+  EXPECT_NEAR(clipped_in(n - 1), 2.0, 1e-9);
+  const Eigen::VectorXd clipped_out =
+      SimulateWithEffect(plant, {EffectKind::kOutputSaturation, {-1.0, 2.5}}, u, 0.01);
+  EXPECT_NEAR(clipped_out(n - 1), 2.5, 1e-12);
+  EXPECT_LE(clipped_out.maxCoeff(), 2.5);
+  const Eigen::VectorXd dead = SimulateWithEffect(plant, {EffectKind::kDeadZone, {0.5}}, u, 0.01);
+  EXPECT_NEAR(dead(n - 1), 2.0, 1e-9);
+  const Eigen::VectorXd quantised =
+      SimulateWithEffect(plant, {EffectKind::kOutputQuantization, {0.4}}, u, 0.01);
+  EXPECT_NEAR(quantised(n - 1), 3.2, 1e-12);  // 3.0 rounds to 8·0.4
+}
+
+TEST(EffectsTest, CubicStiffnessSettlesAtTheRootOfTheStaticBalance) {
+  // Mass–spring–damper ω²/(s² + 2ζωs + ω²) (unit static gain) with u_eff = u − k3 y³ and
+  // constant u: the rest point solves y = u − k3 y³.
+  TransferFunction plant;
+  plant.num = Eigen::VectorXd::Constant(1, 25.0);
+  plant.den = Eigen::Vector3d(1.0, 5.0, 25.0);
+  const double u0 = 2.0, k3 = 0.5;
+  const Eigen::VectorXd y = SimulateWithEffect(plant, {EffectKind::kCubicStiffness, {k3}},
+                                               Eigen::VectorXd::Constant(3000, u0), 0.005);
+  double root = 1.0;  // Newton on k3 y³ + y − u0 = 0
+  for (int i = 0; i < 50; ++i) root -= (k3 * root * root * root + root - u0) / (3 * k3 * root * root + 1);
+  EXPECT_NEAR(y(y.size() - 1), root, 1e-6);
+}
+
+TEST(EffectsTest, CoulombFrictionReducesTheDrivingForce) {
+  // Position of a damped mass 1/(s(s + c)): at constant force u > F_c the velocity settles at
+  // (u − F_c)/c.
+  TransferFunction plant;
+  plant.num = Eigen::VectorXd::Constant(1, 1.0);
+  plant.den = Eigen::Vector3d(1.0, 2.0, 0.0);
+  const double u0 = 1.0, friction = 0.3, ts = 0.01;
+  const Eigen::VectorXd y = SimulateWithEffect(plant, {EffectKind::kCoulombFriction, {friction}},
+                                               Eigen::VectorXd::Constant(2000, u0), ts);
+  const double velocity = (y(1999) - y(1998)) / ts;
+  EXPECT_NEAR(velocity, (u0 - friction) / 2.0, 1e-6);
+  // Below the breakaway force the mass still moves here (pure Coulomb, no stiction), but slower.
+}
+
+TEST(EffectsTest, BadEffectsAreRejectedWithTheirNames) {
+  const auto plant = FirstOrder(1.0, 1.0);
+  const Eigen::VectorXd u = Eigen::VectorXd::Ones(10);
+  auto message = [&](const Effect& e) {
+    try {
+      SimulateWithEffect(plant, e, u, 0.1);
+    } catch (const std::invalid_argument& error) {
+      return std::string(error.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message({EffectKind::kDeadZone, {}}).find("dead_zone takes 1 parameters, got 0"), std::string::npos);
+  EXPECT_NE(message({EffectKind::kBacklash, {-0.1}}).find("r must be >= 0"), std::string::npos);
+  EXPECT_NE(message({EffectKind::kInputSaturation, {1.0, -1.0}}).find("lower limit"), std::string::npos);
+  EXPECT_NE(message({EffectKind::kOutputQuantization, {0.0}}).find("q must be > 0"), std::string::npos);
+  EXPECT_NE(message({EffectKind::kTimeDelay, {NAN}}).find("not finite"), std::string::npos);
+  try {
+    EffectFromName("stiction");
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown effect 'stiction'"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace idrig
+
+#include "core/io/gap_json.h"
+
+namespace idrig {
+namespace {
+
+TEST(EffectJsonTest, RoundTripAndClearErrors) {
+  const Effect backlash{EffectKind::kBacklash, {0.25}};
+  const Effect back = EffectFromJson(EffectToJson(backlash));
+  EXPECT_EQ(back.kind, EffectKind::kBacklash);
+  EXPECT_EQ(back.params, backlash.params);
+  const Effect sensor = EffectFromJson({{"effect", "sensor_nonlinearity"}, {"params", {{"a3", 0.1}}}});
+  EXPECT_EQ(sensor.params, (std::vector<double>{1.0, 0.0, 0.1, 0.0}));
+  auto error = [](const nlohmann::json& j) {
+    try {
+      EffectFromJson(j);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(error({{"effect", "dead_zone"}}).find("missing parameter 'd'"), std::string::npos);
+  EXPECT_NE(error({{"effect", "dead_zone"}, {"params", {{"width", 1}}}}).find("unknown parameter 'width'"),
+            std::string::npos);
+  EXPECT_NE(error({{"effect", "stiction"}}).find("unknown effect 'stiction'"), std::string::npos);
+  EXPECT_NE(error({{"effect", "dead_zone"}, {"params", {{"d", -1}}}}).find("d must be >= 0"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace idrig

@@ -1,0 +1,83 @@
+// LTI model core: conversions, poles/zeros/residues, frequency response, exact ZOH simulation.
+// References are closed forms.
+#include "core/numeric/model/lti_model.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace idrig {
+namespace {
+
+constexpr double kTight = 1e-10;
+
+TEST(LtiModel, FirstOrderStepResponseIsExactUnderZoh) {
+  // W(s) = 2/(3s + 1): y(kT) = 2(1 − e^{−kT/3}) for a unit step held from t = 0.
+  TransferFunction tf{Eigen::VectorXd::Constant(1, 2.0), Eigen::Vector2d(3.0, 1.0)};
+  const Eigen::MatrixXd y = StepResponse(ToStateSpace(tf), 0.1, 50);
+  for (int k = 0; k < 50; ++k) EXPECT_NEAR(y(k, 0), 2.0 * (1.0 - std::exp(-k * 0.1 / 3.0)), kTight);
+}
+
+TEST(LtiModel, FractionalDelayIsExact) {
+  // W(s) = e^{−0.25 s}/(s + 1) with Ts = 0.1: y(t) = 1 − e^{−(t − 0.25)} for t >= 0.25.
+  TransferFunction tf{Eigen::VectorXd::Ones(1), Eigen::Vector2d(1.0, 1.0), 0.0, 0.25};
+  const Eigen::MatrixXd y = StepResponse(ToStateSpace(tf), 0.1, 40);
+  for (int k = 0; k < 40; ++k) {
+    const double t = k * 0.1;
+    EXPECT_NEAR(y(k, 0), t < 0.25 ? 0.0 : 1.0 - std::exp(-(t - 0.25)), kTight) << "k = " << k;
+  }
+}
+
+TEST(LtiModel, TransferFunctionRoundTripAndPolesZerosResidues) {
+  // W(s) = (s + 3)/((s + 1)(s + 2)) = 2/(s + 1) − 1/(s + 2).
+  TransferFunction tf{Eigen::Vector2d(1.0, 3.0), Eigen::Vector3d(1.0, 3.0, 2.0)};
+  const TransferFunction back = ToTransferFunction(ToStateSpace(tf));
+  EXPECT_LT((back.num - tf.num).cwiseAbs().maxCoeff(), kTight);
+  EXPECT_LT((back.den - tf.den).cwiseAbs().maxCoeff(), kTight);
+  const PartialFractions pf = Residues(tf);
+  for (int i = 0; i < 2; ++i) {
+    const double p = pf.poles(i).real();
+    EXPECT_NEAR(pf.residues(i).real(), std::abs(p + 1.0) < 1e-9 ? 2.0 : -1.0, kTight);
+  }
+  EXPECT_NEAR(Zeros(tf)(0).real(), -3.0, kTight);
+  EXPECT_NEAR(DcGain(ToStateSpace(tf))(0, 0), 1.5, kTight);
+  // H(jω) against the closed form.
+  const std::complex<double> jw(0.0, 2.0);
+  EXPECT_LT(std::abs(FrequencyResponse(tf, 2.0) - (jw + 3.0) / ((jw + 1.0) * (jw + 2.0))), kTight);
+  EXPECT_LT(std::abs(FrequencyResponse(ToStateSpace(tf), 2.0)(0, 0) - FrequencyResponse(tf, 2.0)), kTight);
+}
+
+TEST(LtiModel, DiscreteImpulseIsMarkovParameters) {
+  // y[k] = 0.5 y[k−1] + u[k−1]: impulse response 0, 1, 0.5, 0.25, …
+  TransferFunction tf{Eigen::VectorXd::Ones(1), Eigen::Vector2d(1.0, -0.5), 0.1};
+  const auto g = ImpulseResponse(ToStateSpace(tf), 0.1, 5);
+  EXPECT_NEAR(g[0](0, 0), 0.0, kTight);
+  for (int k = 1; k < 5; ++k) EXPECT_NEAR(g[k](0, 0), std::pow(0.5, k - 1), kTight);
+  EXPECT_TRUE(IsStable(ToStateSpace(tf)));
+}
+
+TEST(LtiModel, ContinuousImpulseSamplesAreClosedForm) {
+  TransferFunction tf{Eigen::VectorXd::Ones(1), Eigen::Vector3d(1.0, 0.4, 4.04)};  // poles −0.2 ± 2j
+  const auto g = ImpulseResponse(ToStateSpace(tf), 0.05, 30);
+  for (int k = 0; k < 30; ++k) {
+    const double t = k * 0.05;
+    EXPECT_NEAR(g[k](0, 0), std::exp(-0.2 * t) * std::sin(2.0 * t) / 2.0, kTight);
+  }
+}
+
+TEST(LtiModelBadInput, ClearErrors) {
+  TransferFunction improper{Eigen::Vector3d(1, 2, 3), Eigen::Vector2d(1, 1)};
+  EXPECT_THROW(Validate(improper), std::invalid_argument);
+  TransferFunction nan_tf{Eigen::VectorXd::Constant(1, std::nan("")), Eigen::Vector2d(1, 1)};
+  EXPECT_THROW(Validate(nan_tf), std::invalid_argument);
+  TransferFunction bad_delay{Eigen::VectorXd::Ones(1), Eigen::Vector2d(1, -0.5), 0.1, 0.15};
+  EXPECT_THROW(Validate(bad_delay), std::invalid_argument);
+  StateSpace ss{Eigen::MatrixXd::Identity(2, 2), Eigen::MatrixXd::Ones(3, 1), Eigen::MatrixXd::Ones(1, 2),
+                Eigen::MatrixXd::Zero(1, 1)};
+  EXPECT_THROW(Validate(ss), std::invalid_argument);
+  TransferFunction ok{Eigen::VectorXd::Ones(1), Eigen::Vector2d(1, 1)};
+  EXPECT_THROW(Simulate(ToStateSpace(ok), Eigen::MatrixXd::Ones(5, 2), 0.1), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace idrig
