@@ -66,8 +66,18 @@ IoRecord ParseIoRecordCsv(const std::string& text, const std::string& source_nam
 
   const size_t width = header.size();
   std::vector<double> values;  // row-major, `width` per row
-  values.reserve(lines.RemainingLinesBound() * width);
-  while (lines.Next(&line)) {
+  values.reserve(lines.RemainingBytes() / 8);  // a guess (≥ 8 bytes per value): it grows if short
+  while (true) {
+    // Fast path: a plain numeric row parsed in place; anything else goes the general way.
+    const size_t at = values.size();
+    values.resize(at + width);
+    const size_t used = csv::ParseNumericRow(lines.Rest(), width, values.data() + at);
+    if (used > 0) {
+      lines.Consume(used);
+      continue;
+    }
+    values.resize(at);
+    if (!lines.Next(&line)) break;
     const std::string_view trimmed = csv::Trim(line, kStrip);
     if (trimmed.empty() || trimmed[0] == '#') continue;
     csv::SplitFields(line, kStrip, &fields);

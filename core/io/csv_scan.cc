@@ -29,9 +29,26 @@ std::string ReadFile(const std::string& path, const std::string& unreadable_mess
   return content;
 }
 
-size_t LineReader::RemainingLinesBound() const {
-  if (pos_ >= text_.size()) return 0;
-  return static_cast<size_t>(std::count(text_.begin() + pos_, text_.end(), '\n')) + 1;
+size_t ParseNumericRow(std::string_view rest, size_t width, double* values) {
+  const char* const begin = rest.data();
+  const char* const end = begin + rest.size();
+  const char* p = begin;
+  for (size_t c = 0; c < width; ++c) {
+    while (p < end && (*p == ' ' || *p == '\t')) ++p;
+    if (p == end || *p == '+' || *p == '"' || *p == '#') return 0;
+    const auto [next, ec] = std::from_chars(p, end, values[c], std::chars_format::general);
+    if (ec != std::errc()) return 0;  // out of range or not a number: the general path
+    p = next;
+    while (p < end && (*p == ' ' || *p == '\t')) ++p;
+    if (c + 1 < width) {
+      if (p == end || *p != ',') return 0;
+      ++p;
+    }
+  }
+  if (p < end && *p == '\r') ++p;
+  if (p == end) return static_cast<size_t>(p - begin);
+  if (*p != '\n') return 0;
+  return static_cast<size_t>(p + 1 - begin);
 }
 
 void SplitFields(std::string_view line, std::string_view strip, std::vector<std::string_view>* fields) {

@@ -31,8 +31,15 @@ class LineReader {
     return true;
   }
   int line_number() const { return line_number_; }
-  // Upper bound of the lines left (for reserving).
-  size_t RemainingLinesBound() const;
+  // Bytes not yet read (for reserving).
+  size_t RemainingBytes() const { return pos_ < text_.size() ? text_.size() - pos_ : 0; }
+  // The fast path of a caller that parsed the next line itself: the unread text, and a step
+  // past `bytes` of it holding one line (its '\n' included).
+  std::string_view Rest() const { return pos_ < text_.size() ? text_.substr(pos_) : std::string_view(); }
+  void Consume(size_t bytes) {
+    pos_ += bytes;
+    ++line_number_;
+  }
 
  private:
   std::string_view text_;
@@ -56,5 +63,12 @@ void SplitFields(std::string_view line, std::string_view strip, std::vector<std:
 // infinity, nan, any case; out-of-range values become ±inf or 0 as strtod gives them). False
 // when the field is empty or anything is left over.
 bool ParseDouble(std::string_view field, double* value);
+
+// Fast path for a plain numeric row at the start of `rest`: `width` numbers separated by ',',
+// blanks (' ', '\t') around them, the line ended by '\n', "\r\n" or the end of the text.
+// Returns the bytes of the line (with its '\n') and fills values[0..width), or 0 when the line
+// is anything else (comment, blank, quotes, '+', wrong field count, not a number): the caller
+// then takes the general path, which names the problem.
+size_t ParseNumericRow(std::string_view rest, size_t width, double* values);
 
 }  // namespace idrig::csv
