@@ -89,11 +89,12 @@ double FrfCost(const Frf& frf, const Eigen::VectorXcd& model, const Eigen::Vecto
   return cost;
 }
 
-double FrfFitPercent(const Frf& frf, const Eigen::VectorXcd& model) {
+double FrfFitPercent(const Frf& frf, const Eigen::VectorXcd& model, const Eigen::VectorXd& weights) {
   double r = 0.0, g = 0.0;
   for (int k = 0; k < frf.NumLines(); ++k) {
-    r += std::norm(model(k) - frf.h[k](0, 0));
-    g += std::norm(frf.h[k](0, 0));
+    const double w2 = weights.size() ? weights(k) * weights(k) : 1.0;
+    r += w2 * std::norm(model(k) - frf.h[k](0, 0));
+    g += w2 * std::norm(frf.h[k](0, 0));
   }
   return g > 0.0 ? 100.0 * (1.0 - std::sqrt(r / g)) : 0.0;
 }
@@ -235,7 +236,7 @@ LevyResult FitLevy(const Frf& frf, const LevyOptions& options) {
   result.iterations = 1 + result.sk_iterations + result.refine_iterations;
   const Eigen::VectorXcd fitted = response(a, b);
   result.final_cost = FrfCost(frf, fitted, w);
-  result.fit_percent = FrfFitPercent(frf, fitted);
+  result.fit_percent = FrfFitPercent(frf, fitted, w);
   if (!result.model.den.allFinite() || !result.model.num.allFinite()) {
     result.status = SolverStatus::kFailed;
     result.message = "the regression produced non-finite coefficients";

@@ -48,7 +48,8 @@ struct LevyResult : ResultBase {
   bool refined = false;         // the output-error refinement ran and lowered the cost
   double sk_cost = 0.0;         // Σ w²|r|² at the SK solution (before the refinement)
   int refine_iterations = 0;
-  // final_cost = Σ w²|r|²; fit_percent = 100(1 − ‖r‖/‖g‖) on the FRF itself.
+  // final_cost = Σ w²|r|²; fit_percent = 100(1 − ‖w·r‖/‖w·g‖) on the FRF itself, weighted
+  // like the cost (with w = 1/σ, lines the input did not excite count as little as they should).
 };
 
 // Throws std::invalid_argument for an invalid FRF (not SISO, ω <= 0, NaN), degrees < 0 / n < 1,
@@ -58,6 +59,7 @@ LevyResult FitLevy(const Frf& frf, const LevyOptions& options);
 
 // Output error helpers shared by the frequency methods.
 double FrfCost(const Frf& frf, const Eigen::VectorXcd& model_response, const Eigen::VectorXd& weights);
-double FrfFitPercent(const Frf& frf, const Eigen::VectorXcd& model_response);
+double FrfFitPercent(const Frf& frf, const Eigen::VectorXcd& model_response,
+                     const Eigen::VectorXd& weights = Eigen::VectorXd());
 
 }  // namespace idrig
