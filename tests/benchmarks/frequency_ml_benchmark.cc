@@ -18,56 +18,19 @@
 #include "core/io/csv.h"
 #include "core/methods/registry.h"
 #include "core/numeric/frequency_domain/stable_nls.h"
+#include "tests/unit/numeric/frequency_domain/frf_crb.h"
 
 namespace {
 
 using namespace idrig;
+using idrig::testing::PoleCrb;
+using idrig::testing::SquaredPoleError;
 using Complex = std::complex<double>;
 
 Eigen::VectorXd LogLines(int n, double lo, double hi) {
   Eigen::VectorXd w(n);
   for (int k = 0; k < n; ++k) w(k) = lo * std::pow(hi / lo, k / (n - 1.0));
   return w;
-}
-
-double SquaredPoleError(const Eigen::VectorXcd& truth, const Eigen::VectorXcd& est) {
-  double sum = 0.0;
-  for (int i = 0; i < truth.size(); ++i) {
-    double best = 1e300;
-    for (int j = 0; j < est.size(); ++j) best = std::min(best, std::norm(truth(i) - est(j)));
-    sum += best;
-  }
-  return sum;
-}
-
-// √trace of the poles' CRB covariance for G = B/A (A monic of degree n, B of degree m).
-double PoleCrb(const TransferFunction& tf, const Eigen::VectorXd& omega, const Eigen::VectorXd& sigma) {
-  const int n = tf.Order(), m = static_cast<int>(tf.num.size()) - 1, q = n + m + 1;
-  const int lines = static_cast<int>(omega.size());
-  Eigen::MatrixXcd j(lines, q);
-  for (int k = 0; k < lines; ++k) {
-    const Complex s(0.0, omega(k));
-    const Complex a = PolyVal(tf.den, s), g = PolyVal(tf.num, s) / a;
-    Complex sj = 1.0;
-    for (int i = 0; i < std::max(n, m + 1); ++i, sj *= s) {
-      if (i < n) j(k, i) = -g * sj / a;
-      if (i <= m) j(k, n + i) = sj / a;
-    }
-    j.row(k) /= sigma(k);
-  }
-  const Eigen::MatrixXd fim = 2.0 * (j.adjoint() * j).real();
-  const Eigen::MatrixXd cov = fim.inverse();
-  const Eigen::VectorXcd poles = Poles(tf);
-  // A′(p) for the monic descending den.
-  Eigen::VectorXd dden(n);
-  for (int i = 0; i < n; ++i) dden(i) = tf.den(i) * (n - i);
-  Eigen::MatrixXcd d = Eigen::MatrixXcd::Zero(n, q);
-  for (int i = 0; i < n; ++i) {
-    const Complex da = PolyVal(dden, poles(i));
-    Complex pj = 1.0;
-    for (int c = 0; c < n; ++c, pj *= poles(i)) d(i, c) = -pj / da;
-  }
-  return std::sqrt((d * cov.cast<Complex>() * d.adjoint()).trace().real());
 }
 
 // Part 2, a time record: seed 001's plant under a random binary ±1 input held 4 samples,

@@ -1,7 +1,6 @@
 // Frequency-domain maximum likelihood (issue 15): with w_k = 1/σ_k, levy-sk (SK then the
-// output-error step) and stable-nls reach the Cramér–Rao bound. The bound is written out here
-// from its definition (FIM = 2 Re(JᴴΣ⁻¹J) for complex noise with E|e_k|² = σ_k², J = ∂G/∂θ of
-// G = B/A, the poles' covariance by ∂p/∂a = −p^j/A′(p)), independently of the fitting code.
+// output-error step) and stable-nls reach the Cramér–Rao bound, written out from its
+// definition in frf_crb.h, independently of the fitting code.
 // Tolerance: ≤ 2× the bound over 10 seeds (the benchmark measures 0.89× over 50;
 // docs/frequency.md); the unweighted SK fit is far above it (14× measured), which the test
 // also asserts so that it can fail if the weights are ignored.
@@ -15,6 +14,7 @@
 #include "core/io/frf_csv.h"
 #include "core/methods/registry.h"
 #include "core/numeric/frequency_domain/stable_nls.h"
+#include "tests/unit/numeric/frequency_domain/frf_crb.h"
 #include "tests/unit/numeric/seed001_plant.h"
 
 namespace idrig {
@@ -28,42 +28,13 @@ Eigen::VectorXd Lines() {
   return w;
 }
 
-double PoleBound(const TransferFunction& tf, const Eigen::VectorXd& omega, const Eigen::VectorXd& sigma) {
-  const int n = tf.Order(), m = static_cast<int>(tf.num.size()) - 1, q = n + m + 1;
-  Eigen::MatrixXcd j(omega.size(), q);
-  for (int k = 0; k < omega.size(); ++k) {
-    const Complex s(0.0, omega(k)), a = PolyVal(tf.den, s), g = PolyVal(tf.num, s) / a;
-    for (int i = 0; i < n; ++i) j(k, i) = -g * std::pow(s, i) / a / sigma(k);
-    for (int i = 0; i <= m; ++i) j(k, n + i) = std::pow(s, i) / a / sigma(k);
-  }
-  const Eigen::MatrixXd cov = (2.0 * (j.adjoint() * j).real()).inverse();
-  const Eigen::VectorXcd p = Poles(tf);
-  Eigen::MatrixXcd d = Eigen::MatrixXcd::Zero(n, q);
-  for (int i = 0; i < n; ++i) {
-    Complex da = 0.0;  // A′(p) of the monic descending den
-    for (int c = 0; c < n; ++c) da += tf.den(c) * double(n - c) * std::pow(p(i), n - c - 1);
-    for (int c = 0; c < n; ++c) d(i, c) = -std::pow(p(i), c) / da;
-  }
-  return std::sqrt((d * cov.cast<Complex>() * d.adjoint()).trace().real());
-}
-
-double SquaredError(const Eigen::VectorXcd& truth, const Eigen::VectorXcd& est) {
-  double sum = 0.0;
-  for (int i = 0; i < truth.size(); ++i) {
-    double best = 1e300;
-    for (int j = 0; j < est.size(); ++j) best = std::min(best, std::norm(truth(i) - est(j)));
-    sum += best;
-  }
-  return sum;
-}
-
 TEST(FrequencyMl, WeightedFitsReachTheCramerRaoBoundUnderRelativeNoise) {
   const TransferFunction plant = testing::PlantTf();
   const Eigen::VectorXcd poles = Poles(plant);
   const Eigen::VectorXd omega = Lines();
   const Eigen::VectorXcd g0 = FrequencyResponse(plant, omega);
   const Eigen::VectorXd sigma = 0.01 * g0.cwiseAbs();
-  const double bound = PoleBound(plant, omega, sigma);
+  const double bound = testing::PoleCrb(plant, omega, sigma);
   const int seeds = 10;
   double sk_plain = 0, levy_ml = 0, nls_ml = 0;
   for (int seed = 1; seed <= seeds; ++seed) {
@@ -75,18 +46,18 @@ TEST(FrequencyMl, WeightedFitsReachTheCramerRaoBoundUnderRelativeNoise) {
     LevyOptions lo;
     lo.denominator_degree = 3;
     lo.numerator_degree = 1;
-    sk_plain += SquaredError(poles, FitLevy(frf, lo).poles) / seeds;
+    sk_plain += testing::SquaredPoleError(poles, FitLevy(frf, lo).poles) / seeds;
     lo.weights = sigma.cwiseInverse();
     lo.refine_output_error = true;
     const LevyResult l = FitLevy(frf, lo);
     EXPECT_TRUE(l.ok()) << l.message;
     EXPECT_TRUE(l.refined);
-    levy_ml += SquaredError(poles, l.poles) / seeds;
+    levy_ml += testing::SquaredPoleError(poles, l.poles) / seeds;
     StableNlsOptions so;
     so.denominator_degree = 3;
     so.numerator_degree = 1;
     so.weights = lo.weights;
-    nls_ml += SquaredError(poles, FitStableNls(frf, so).poles) / seeds;
+    nls_ml += testing::SquaredPoleError(poles, FitStableNls(frf, so).poles) / seeds;
   }
   EXPECT_LE(std::sqrt(levy_ml), 2.0 * bound) << "bound " << bound;
   EXPECT_LE(std::sqrt(nls_ml), 2.0 * bound) << "bound " << bound;
