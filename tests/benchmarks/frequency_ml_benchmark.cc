@@ -105,10 +105,7 @@ int main(int argc, char** argv) {
   double sq[3][3] = {};
   int not_ok[3][3] = {};
   for (int seed = 1; seed <= seeds; ++seed) {
-    std::mt19937_64 rng(seed);
-    std::normal_distribution<double> n01;
-    Eigen::VectorXcd g = g0;
-    for (int k = 0; k < g.size(); ++k) g(k) += sigma(k) * Complex(n01(rng), n01(rng)) / std::sqrt(2.0);
+    const Eigen::VectorXcd g = idrig::testing::WithComplexNoise(g0, sigma, seed);
     const Frf frf = MakeSisoFrf(omega, g);
     const Eigen::VectorXd weights[3] = {Eigen::VectorXd(), g.cwiseAbs().cwiseInverse(), sigma.cwiseInverse()};
     for (int v = 0; v < 3; ++v) {

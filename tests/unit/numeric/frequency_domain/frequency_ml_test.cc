@@ -38,11 +38,7 @@ TEST(FrequencyMl, WeightedFitsReachTheCramerRaoBoundUnderRelativeNoise) {
   const int seeds = 10;
   double sk_plain = 0, levy_ml = 0, nls_ml = 0;
   for (int seed = 1; seed <= seeds; ++seed) {
-    std::mt19937_64 rng(seed);
-    std::normal_distribution<double> n01;
-    Eigen::VectorXcd g = g0;
-    for (int k = 0; k < g.size(); ++k) g(k) += sigma(k) * Complex(n01(rng), n01(rng)) / std::sqrt(2.0);
-    const Frf frf = MakeSisoFrf(omega, g);
+    const Frf frf = MakeSisoFrf(omega, testing::WithComplexNoise(g0, sigma, seed));
     LevyOptions lo;
     lo.denominator_degree = 3;
     lo.numerator_degree = 1;

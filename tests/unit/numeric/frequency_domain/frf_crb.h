@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <random>
 
 #include "core/numeric/model/lti_model.h"
 
@@ -33,6 +34,15 @@ inline double PoleCrb(const TransferFunction& tf, const Eigen::VectorXd& omega, 
     for (int c = 0; c < n; ++c) d(i, c) = -std::pow(p(i), c) / da;
   }
   return std::sqrt((d * cov.cast<Complex>() * d.adjoint()).trace().real());
+}
+
+// g0 plus complex noise with E|e_k|² = σ_k² (real and imaginary parts N(0, σ_k²/2)), seeded.
+inline Eigen::VectorXcd WithComplexNoise(const Eigen::VectorXcd& g0, const Eigen::VectorXd& sigma, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n01;
+  Eigen::VectorXcd g = g0;
+  for (int k = 0; k < g.size(); ++k) g(k) += sigma(k) * std::complex<double>(n01(rng), n01(rng)) / std::sqrt(2.0);
+  return g;
 }
 
 // Σ_i |p̂ − p_i|² with each true pole matched to the nearest estimate.
