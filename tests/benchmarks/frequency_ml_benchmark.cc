@@ -1,5 +1,7 @@
 // Frequency-domain maximum likelihood against the Cramér–Rao bound (issue 15). Not run by ctest.
-//   frequency_ml_benchmark [SEEDS]      (part 2, a time record, is described at TimeRecord)
+//   frequency_ml_benchmark [SEEDS] [DUMP_DIR]   (part 2, a time record, is described at TimeRecord)
+// With DUMP_DIR, part 1's FRFs are written there (frf_<seed>.csv with a sigma column, poles.csv,
+// crb.txt) for tests/benchmarks/frequency_ml_vs_octave.sh, and part 2 is skipped.
 // Seed 001's plant W(p) = (0.5p + 1)/(p³ + 2.5p² + 4p + 1.5), 200 lines log-spaced over
 // 0.05–20 rad/s, complex noise relative to |G|: e_k = 0.01·|G_k|·(n₁ + j n₂)/√2 (E|e_k|² = σ_k²,
 // σ_k = 1 % of |G_k|). Fits: levy-sk and stable-nls unweighted, weighted by 1/|G̃_k| (the
@@ -16,6 +18,7 @@
 #include <string>
 
 #include "core/io/csv.h"
+#include "core/io/frf_csv.h"
 #include "core/methods/registry.h"
 #include "core/numeric/frequency_domain/stable_nls.h"
 #include "tests/unit/numeric/frequency_domain/frf_crb.h"
@@ -90,6 +93,7 @@ void TimeRecord(int seeds, double noise) {
 
 int main(int argc, char** argv) {
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 50;
+  const std::string dump = argc > 2 ? argv[2] : "";
   TransferFunction plant;
   plant.num = Eigen::Vector2d(0.5, 1.0);
   plant.den = Eigen::Vector4d(1.0, 2.5, 4.0, 1.5);
@@ -107,6 +111,11 @@ int main(int argc, char** argv) {
   for (int seed = 1; seed <= seeds; ++seed) {
     const Eigen::VectorXcd g = idrig::testing::WithComplexNoise(g0, sigma, seed);
     const Frf frf = MakeSisoFrf(omega, g);
+    if (!dump.empty()) {
+      Frf with_sigma = frf;
+      with_sigma.variance = sigma.array().square().matrix();
+      WriteFrfCsv(with_sigma, dump + "/frf_" + std::to_string(seed) + ".csv");
+    }
     const Eigen::VectorXd weights[3] = {Eigen::VectorXd(), g.cwiseAbs().cwiseInverse(), sigma.cwiseInverse()};
     for (int v = 0; v < 3; ++v) {
       for (int refine = 0; refine < 2; ++refine) {
@@ -133,6 +142,15 @@ int main(int argc, char** argv) {
     for (int v = 0; v < 3; ++v)
       std::printf("| %s | %s | %.4g | %.2f | %d of %d |\n", fits[f], weightings[v], std::sqrt(sq[f][v]),
                   std::sqrt(sq[f][v]) / crb, not_ok[f][v], seeds);
+  if (!dump.empty()) {
+    std::FILE* p = std::fopen((dump + "/poles.csv").c_str(), "w");
+    for (int i = 0; i < poles.size(); ++i) std::fprintf(p, "%.17g,%.17g\n", poles(i).real(), poles(i).imag());
+    std::fclose(p);
+    std::FILE* c = std::fopen((dump + "/crb.txt").c_str(), "w");
+    std::fprintf(c, "%.17g\n", crb);
+    std::fclose(c);
+    return 0;
+  }
   TimeRecord(seeds, 0.01);
   TimeRecord(seeds, 0.05);
   return 0;
