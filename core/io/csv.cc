@@ -1,73 +1,52 @@
 #include "core/io/csv.h"
 
-#include <cerrno>
-#include <cmath>
-#include <cstdlib>
+#include <cctype>
 #include <fstream>
 #include <iomanip>
-#include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <string_view>
 #include <vector>
+
+#include "core/io/csv_scan.h"
 
 namespace idrig {
 namespace {
 
-std::string Trim(const std::string& s) {
-  const auto begin = s.find_first_not_of(" \t\r\n\"");
-  if (begin == std::string::npos) return "";
-  const auto end = s.find_last_not_of(" \t\r\n\"");
-  return s.substr(begin, end - begin + 1);
-}
-
-std::vector<std::string> SplitFields(const std::string& line) {
-  std::vector<std::string> fields;
-  std::stringstream ss(line);
-  std::string field;
-  while (std::getline(ss, field, ',')) fields.push_back(Trim(field));
-  if (!line.empty() && line.back() == ',') fields.push_back("");
-  return fields;
-}
-
-double ParseNumber(const std::string& field, bool* ok) {
-  if (field.empty()) { *ok = false; return 0.0; }
-  const std::string lower = [&] { std::string l; for (char c : field) l += std::tolower(c); return l; }();
-  if (lower == "nan") { *ok = true; return std::numeric_limits<double>::quiet_NaN(); }
-  if (lower == "inf" || lower == "+inf") { *ok = true; return std::numeric_limits<double>::infinity(); }
-  if (lower == "-inf") { *ok = true; return -std::numeric_limits<double>::infinity(); }
-  char* end = nullptr;
-  errno = 0;
-  const double value = std::strtod(field.c_str(), &end);
-  *ok = end != field.c_str() && *end == '\0';
-  return value;
-}
+constexpr std::string_view kStrip = " \t\r\n\"";
 
 }  // namespace
 
+// One pass over the text (csv_scan.h): fields are views into it, numbers by std::from_chars,
+// the values go into one row-major buffer.
 IoRecord ParseIoRecordCsv(const std::string& text, const std::string& source_name) {
   auto fail = [&](const std::string& what) {
     throw std::invalid_argument(source_name + ": " + what);
   };
-  std::istringstream in(text);
-  std::string line;
-  int line_number = 0;
+  csv::LineReader lines(text);
+  std::string_view line;
+  std::vector<std::string_view> fields;
   std::vector<std::string> header;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (!Trim(line).empty() && Trim(line)[0] != '#') { header = SplitFields(line); break; }
+  while (lines.Next(&line)) {
+    const std::string_view trimmed = csv::Trim(line, kStrip);
+    if (!trimmed.empty() && trimmed[0] != '#') {
+      csv::SplitFields(line, kStrip, &fields);
+      header.assign(fields.begin(), fields.end());
+      break;
+    }
   }
   if (header.empty()) fail("empty file: expected a header line such as 't,u,y'");
   {
-    bool numeric = false;
-    ParseNumber(header[0], &numeric);
-    if (numeric) fail("missing header line: the first line holds numbers; expected column names such as 't,u,y'");
+    double ignored = 0.0;
+    if (csv::ParseDouble(header[0], &ignored))
+      fail("missing header line: the first line holds numbers; expected column names such as 't,u,y'");
   }
   int time_column = -1;
   std::vector<int> input_columns, output_columns;
   IoRecord record;
   for (size_t c = 0; c < header.size(); ++c) {
     std::string name;
-    for (char ch : header[c]) name += std::tolower(ch);
+    for (char ch : header[c]) name += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
     if (name == "t" || name == "time") {
       if (time_column >= 0) fail("two time columns in the header");
       time_column = static_cast<int>(c);
@@ -85,34 +64,44 @@ IoRecord ParseIoRecordCsv(const std::string& text, const std::string& source_nam
   if (input_columns.empty()) fail("no input column ('u' or 'u1', 'u2', …) in the header");
   if (output_columns.empty()) fail("no output column ('y' or 'y1', 'y2', …) in the header");
 
-  std::vector<std::vector<double>> rows;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const std::string trimmed = Trim(line);
-    if (trimmed.empty() || trimmed[0] == '#') continue;
-    const auto fields = SplitFields(line);
-    if (fields.size() != header.size())
-      fail("line " + std::to_string(line_number) + " has " + std::to_string(fields.size()) +
-           " fields, the header has " + std::to_string(header.size()) + " (truncated file?)");
-    std::vector<double> row(fields.size());
-    for (size_t c = 0; c < fields.size(); ++c) {
-      bool ok = false;
-      row[c] = ParseNumber(fields[c], &ok);
-      if (!ok)
-        fail("line " + std::to_string(line_number) + ", column '" + header[c] + "': '" +
-             fields[c] + "' is not a number");
+  const size_t width = header.size();
+  std::vector<double> values;  // row-major, `width` per row
+  values.reserve(lines.RemainingBytes() / 8);  // a guess (≥ 8 bytes per value): it grows if short
+  while (true) {
+    // Fast path: a plain numeric row parsed in place; anything else goes the general way.
+    const size_t at = values.size();
+    values.resize(at + width);
+    const size_t used = csv::ParseNumericRow(lines.Rest(), width, values.data() + at);
+    if (used > 0) {
+      lines.Consume(used);
+      continue;
     }
-    rows.push_back(std::move(row));
+    values.resize(at);
+    if (!lines.Next(&line)) break;
+    const std::string_view trimmed = csv::Trim(line, kStrip);
+    if (trimmed.empty() || trimmed[0] == '#') continue;
+    csv::SplitFields(line, kStrip, &fields);
+    if (fields.size() != width)
+      fail("line " + std::to_string(lines.line_number()) + " has " + std::to_string(fields.size()) +
+           " fields, the header has " + std::to_string(width) + " (truncated file?)");
+    for (size_t c = 0; c < width; ++c) {
+      double value = 0.0;
+      if (!csv::ParseDouble(fields[c], &value))
+        fail("line " + std::to_string(lines.line_number()) + ", column '" + header[c] + "': '" +
+             std::string(fields[c]) + "' is not a number");
+      values.push_back(value);
+    }
   }
-  const long n = static_cast<long>(rows.size());
+  const long n = static_cast<long>(values.size() / width);
   if (n == 0) fail("no data rows after the header");
   record.t.resize(n);
   record.u.resize(n, input_columns.size());
   record.y.resize(n, output_columns.size());
   for (long r = 0; r < n; ++r) {
-    record.t(r) = rows[r][time_column];
-    for (size_t c = 0; c < input_columns.size(); ++c) record.u(r, c) = rows[r][input_columns[c]];
-    for (size_t c = 0; c < output_columns.size(); ++c) record.y(r, c) = rows[r][output_columns[c]];
+    const double* row = values.data() + r * width;
+    record.t(r) = row[time_column];
+    for (size_t c = 0; c < input_columns.size(); ++c) record.u(r, c) = row[input_columns[c]];
+    for (size_t c = 0; c < output_columns.size(); ++c) record.y(r, c) = row[output_columns[c]];
   }
   // The mean step: times printed with few digits scatter around the grid, their mean does not.
   record.sample_time = n >= 2 ? (record.t(n - 1) - record.t(0)) / (n - 1) : 0.0;
@@ -125,11 +114,7 @@ IoRecord ParseIoRecordCsv(const std::string& text, const std::string& source_nam
 }
 
 IoRecord ReadIoRecordCsv(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  if (!file) throw std::invalid_argument(path + ": cannot open the file for reading");
-  std::ostringstream content;
-  content << file.rdbuf();
-  return ParseIoRecordCsv(content.str(), path);
+  return ParseIoRecordCsv(csv::ReadFile(path, path + ": cannot open the file for reading"), path);
 }
 
 std::string FormatIoRecordCsv(const IoRecord& record) {

@@ -52,7 +52,7 @@ std::string Poly(const Eigen::VectorXd& p, const char* var) {
 
 ArxOptions ParseOptions(const json& o, bool output_error) {
   CheckOptionKeys(o, {"order", "max_order", "input_delay", "decimation", "first_equation",
-                      "max_equations", "epsilon", "oe_iterations", "log_series_terms"},
+                      "max_equations", "epsilon", "oe_iterations", "oe_tolerance", "log_series_terms"},
                   output_error ? "arx-oe" : "arx");
   ArxOptions options;
   auto get_int = [&](const char* key, int* out) {
@@ -69,6 +69,11 @@ ArxOptions ParseOptions(const json& o, bool output_error) {
   get_int("log_series_terms", &options.log_series_terms);
   options.oe_iterations = output_error ? 30 : 0;
   get_int("oe_iterations", &options.oe_iterations);
+  if (o.contains("oe_tolerance")) {
+    if (!o["oe_tolerance"].is_number() || !(o["oe_tolerance"].get<double>() > 0.0))
+      throw std::invalid_argument("option 'oe_tolerance' must be a positive number");
+    options.oe_tolerance = o["oe_tolerance"].get<double>();
+  }
   if (o.contains("epsilon")) {
     if (!o["epsilon"].is_number()) throw std::invalid_argument("option 'epsilon' must be a number");
     options.epsilon = o["epsilon"].get<double>();
@@ -94,6 +99,7 @@ MethodReport Run(const MethodInput& input, const json& options_json, bool output
   d["epsilon_rule"] = r.epsilon_rule;
   d["condition_number"] = r.condition_number;
   d["iterations"] = r.iterations;
+  if (output_error) d["oe_relative_change"] = r.oe_relative_change;
   d["g"] = Vec(r.g);
   d["g_std"] = Vec(r.g_std);
   d["covariance"] = Mat(r.covariance);
@@ -130,7 +136,7 @@ MethodReport Run(const MethodInput& input, const json& options_json, bool output
   std::ostringstream t;
   t << std::setprecision(6);
   t << (output_error ? "ARX + output-error refinement" : "Regularised ARX") << " (seed 001, Eqs. (2.7)-(2.11)): "
-    << r.message << ", status " << ToString(r.status) << "\n";
+    << r.message << ", solver status " << ToString(r.status) << "\n";
   if (!r.order_table.empty()) {
     t << "\nOrder selection (simulation NRMSE on the held-out last third):\n";
     for (const auto& c : r.order_table)

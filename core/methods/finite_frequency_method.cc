@@ -6,13 +6,17 @@
 // integer multiples of ω_b) or multiples (n_k), amplitudes (ρ_k: a number or a list; default:
 // measured from the input by the Fourier filter), epsilon_d, epsilon_k, consecutive,
 // min_base_periods, max_base_periods, skip_base_periods, filter_time, lambda, input_bound,
-// output_bound.
+// output_bound, zoh_correction (default true: the input was held between samples),
+// numerator_tolerance. Defaults (issue 15): without base_omega/frequencies/multiples the test
+// signal is found in the input's spectrum; without numerator_degree γ is chosen by the residual
+// of (12) over γ = 0..n−1 (finite_frequency_defaults.h).
 #include <cmath>
 #include <sstream>
 
 #include "core/io/model_json.h"
 #include "core/methods/registry.h"
 #include "core/numeric/finite_frequency/finite_frequency.h"
+#include "core/numeric/finite_frequency/finite_frequency_defaults.h"
 
 namespace idrig {
 namespace {
@@ -37,7 +41,7 @@ MethodReport Run(const MethodInput& input, const json& o) {
   CheckOptionKeys(o, {"order", "numerator_degree", "base_omega", "frequencies", "multiples",
                       "amplitudes", "epsilon_d", "epsilon_k", "consecutive", "min_base_periods",
                       "max_base_periods", "skip_base_periods", "filter_time", "lambda",
-                      "input_bound", "output_bound"},
+                      "input_bound", "output_bound", "zoh_correction", "numerator_tolerance"},
                   "finite-frequency");
   const IoRecord& record = *input.record;
   FiniteFrequencyOptions options;
@@ -64,17 +68,42 @@ MethodReport Run(const MethodInput& input, const json& o) {
   get_double("input_bound", &options.input_bound);
   get_double("output_bound", &options.output_bound);
   if (options.order < 1) throw std::invalid_argument("finite-frequency needs --order n (>= 1)");
+  options.zoh_correction = true;  // a record's input is held between samples (see finite_frequency.h)
+  if (o.contains("zoh_correction")) {
+    if (!o["zoh_correction"].is_boolean()) throw std::invalid_argument("option 'zoh_correction' must be true or false");
+    options.zoh_correction = o["zoh_correction"].get<bool>();
+  }
   double base_omega = 0.0;
-  get_double("base_omega", &base_omega);
-  if (!(base_omega > 0.0))
-    throw std::invalid_argument("finite-frequency needs --option base_omega=ω_b (rad/s, > 0)");
-  if (o.contains("frequencies") == o.contains("multiples"))
-    throw std::invalid_argument("finite-frequency needs exactly one of --option frequencies=[ω_1,...] (rad/s) or multiples=[n_1,...]");
   std::vector<double> omegas;
-  if (o.contains("frequencies")) {
-    omegas = Numbers(o, "frequencies");
+  json found_json = nullptr;
+  if (!o.contains("base_omega") && !o.contains("frequencies") && !o.contains("multiples")) {
+    // Not given: the test signal (5) is found in the record's input (finite_frequency_defaults.h).
+    const FoundTestSignal found = FindTestSignal(record.u.col(0), record.sample_time);
+    for (size_t k = 0; k < found.phases.size(); ++k)
+      if (std::abs(found.phases[k]) > 0.01) {
+        std::ostringstream m;
+        m << "finite-frequency: the input's line " << k + 1 << " (" << found.signal.Omegas()(k)
+          << " rad/s) has phase " << found.phases[k]
+          << " rad; the test signal (5) is u = sum rho_k sin(omega_k (t - t0)) with t0 the record's first sample "
+             "(zero phases): cut the record to start at t0";
+        throw std::invalid_argument(m.str());
+      }
+    base_omega = found.signal.base_omega;
+    const Eigen::VectorXd w = found.signal.Omegas();
+    omegas.assign(w.data(), w.data() + w.size());
+    found_json = {{"base_omega", base_omega}, {"multiples", found.signal.multiples},
+                  {"amplitudes", found.signal.amplitudes}, {"explained_variance", found.explained}};
   } else {
-    for (double n : Numbers(o, "multiples")) omegas.push_back(n * base_omega);
+    get_double("base_omega", &base_omega);
+    if (!(base_omega > 0.0))
+      throw std::invalid_argument("finite-frequency needs --option base_omega=ω_b (rad/s, > 0)");
+    if (o.contains("frequencies") == o.contains("multiples"))
+      throw std::invalid_argument("finite-frequency needs exactly one of --option frequencies=[ω_1,...] (rad/s) or multiples=[n_1,...]");
+    if (o.contains("frequencies")) {
+      omegas = Numbers(o, "frequencies");
+    } else {
+      for (double n : Numbers(o, "multiples")) omegas.push_back(n * base_omega);
+    }
   }
   std::vector<double> amplitudes(omegas.size(), 1.0);
   const Eigen::VectorXd omega_vector = Eigen::Map<Eigen::VectorXd>(omegas.data(), omegas.size());
@@ -96,14 +125,28 @@ MethodReport Run(const MethodInput& input, const json& o) {
     measured_amplitudes = true;
   }
   options.signal.amplitudes = amplitudes;
+  json numerator_table = nullptr;
+  if (!o.contains("numerator_degree")) {
+    // Not given: the smallest γ < n that fits the frequency equations as well as any.
+    double tolerance = 1e-3;
+    get_double("numerator_tolerance", &tolerance);
+    const NumeratorDegreeChoice choice = ChooseNumeratorDegree(record, options, tolerance);
+    options.numerator_degree = choice.numerator_degree;
+    numerator_table = json::array();
+    for (const auto& row : choice.table)
+      numerator_table.push_back({{"numerator_degree", row.numerator_degree},
+                                 {"relative_residual", std::isfinite(row.residual) ? json(row.residual) : json(nullptr)},
+                                 {"status", row.status}});
+  }
   const FiniteFrequencyResult r = IdentifyFiniteFrequency(record, options);
 
   MethodReport report;
+  report.expect_stable = !(options.lambda > 0.0);  // (31)–(35): an unstable plant on purpose
   json& j = report.json;
   j["model"] = ModelToJson(r.model);
   j["status"] = ToString(r.status);
   j["message"] = r.message;
-  j["fit_percent"] = r.fit_percent;
+  j["fit_percent"] = std::isnan(r.fit_percent) ? json(nullptr) : json(r.fit_percent);
   json d;
   d["d"] = Vec(r.d);
   d["k"] = Vec(r.k);
@@ -117,6 +160,12 @@ MethodReport Run(const MethodInput& input, const json& o) {
   d["stopping_rule_met"] = r.stopping_rule_met;
   d["bound_reached"] = r.bound_reached;
   d["relative_frequency_residual"] = r.final_cost;
+  d["zoh_correction"] = options.zoh_correction;
+  d["numerator_degree"] = options.numerator_degree;
+  d["numerator_degree_chosen"] = !numerator_table.is_null();
+  if (!numerator_table.is_null()) d["numerator_table"] = numerator_table;
+  d["test_signal_found"] = !found_json.is_null();
+  if (!found_json.is_null()) d["found_test_signal"] = found_json;
   json history = json::array();
   for (const auto& e : r.history)
     history.push_back({{"q", e.base_periods}, {"tau", e.tau}, {"alpha", Vec(e.alpha)},

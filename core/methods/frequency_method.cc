@@ -8,8 +8,9 @@
 // time record t,u…,y… (csv.h), whose FRF is estimated first: H1/Welch (options
 // segment_length, overlap) or, with period_samples, the periodic estimator.
 // Common options: output, input (1-based element of a MIMO FRF for the SISO methods),
-// f_min_hz, f_max_hz (band), weight ("none" | "f" as in Balda's listing | "inverse_std"
-// when the FRF carries a variance | "inverse_magnitude" for noise relative to |H|).
+// f_min_hz, f_max_hz (band), weight ("auto" (default): "inverse_std" when the FRF carries a
+// variance — a sigma column, period averaging, Welch's coherence — else "none" | "f" as in
+// Balda's listing | "inverse_std" | "inverse_magnitude" for noise relative to |H|).
 #include <cmath>
 #include <sstream>
 
@@ -29,7 +30,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 const std::vector<std::string> kCommonKeys = {"output", "input", "f_min_hz", "f_max_hz", "weight",
                                               "segment_length", "overlap", "period_samples",
-                                              "skip_periods"};
+                                              "skip_periods", "zoh_correction"};
 
 std::vector<std::string> Keys(std::vector<std::string> extra) {
   extra.insert(extra.end(), kCommonKeys.begin(), kCommonKeys.end());
@@ -55,6 +56,8 @@ bool GetBool(const json& o, const char* key, bool fallback) {
 struct LoadedFrf {
   Frf frf;
   std::string source;  // "frf-file", "welch", "periodic"
+  double sample_time = 0.0;  // of the time record the FRF was estimated from (0: an FRF file)
+  bool zoh_corrected = false;
 };
 
 // Reads the FRF file, or estimates the FRF from a time record; restricts to the band.
@@ -62,6 +65,7 @@ LoadedFrf Load(const MethodInput& input, const json& o) {
   LoadedFrf out;
   if (IsTimeRecordCsv(input.path)) {
     const IoRecord record = ReadIoRecordCsv(input.path);
+    out.sample_time = record.sample_time;
     if (o.contains("period_samples")) {
       PeriodicOptions p;
       p.period_samples = GetInt(o, "period_samples", 0);
@@ -74,6 +78,20 @@ LoadedFrf Load(const MethodInput& input, const json& o) {
       w.overlap = GetDouble(o, "overlap", 0.5);
       out.frf = EstimateFrfWelch(record, w);
       out.source = "welch";
+    }
+    // The record's input is held between samples (a rig's actuator, `idrig simulate`): the FRF
+    // of the samples is that of w(s)·Z(s), Z(jω) = e^(−jωTs/2)·sin(ωTs/2)/(ωTs/2), a
+    // half-sample delay that a continuous low-order model can only mimic with a pole pair near
+    // Nyquist. Divided out per line (variance by |Z|²); the aliases of the hold remain.
+    if (GetBool(o, "zoh_correction", true)) {
+      for (int k = 0; k < out.frf.NumLines(); ++k) {
+        const double x = 0.5 * out.frf.omega(k) * record.sample_time;
+        const std::complex<double> z =
+            std::polar(x > 1e-12 ? std::sin(x) / x : 1.0, -x);
+        out.frf.h[k] /= z;
+        if (out.frf.variance.size()) out.frf.variance.row(k) /= std::norm(z);
+      }
+      out.zoh_corrected = true;
     }
   } else {
     out.frf = ReadFrfCsv(input.path);
@@ -102,8 +120,12 @@ LoadedFrf Load(const MethodInput& input, const json& o) {
   return out;
 }
 
-// The SISO element asked for, without the DC line; weights as asked.
-Frf SisoElement(const Frf& frf, const json& o, Eigen::VectorXd* weights) {
+// The SISO element asked for, without the DC line; weights as asked. The default ("auto") is
+// maximum likelihood when the FRF carries a noise variance per line (a sigma column, averaging
+// over periods, or Welch's coherence): w_k = 1/σ_k, so that Σ w_k²|r_k|² is the negative
+// log-likelihood of complex Gaussian noise; otherwise no weights. `*used` names the choice.
+Frf SisoElement(const Frf& frf, const json& o, Eigen::VectorXd* weights, std::string* used = nullptr,
+                const std::string& default_weight = "auto") {
   const int out = GetInt(o, "output", 1), in = GetInt(o, "input", 1);
   if (out < 1 || out > frf.NumOutputs() || in < 1 || in > frf.NumInputs())
     throw std::invalid_argument("output/input " + std::to_string(out) + "/" + std::to_string(in) +
@@ -115,9 +137,20 @@ Frf SisoElement(const Frf& frf, const json& o, Eigen::VectorXd* weights) {
   Eigen::VectorXd w(keep.size());
   Eigen::VectorXcd h(keep.size());
   Eigen::VectorXd wt = Eigen::VectorXd::Ones(keep.size());
-  if (o.contains("weight") && !o["weight"].is_string())
-    throw std::invalid_argument("option 'weight' must be none, f, inverse_std or inverse_magnitude");
-  const std::string weight = o.contains("weight") ? o["weight"].get<std::string>() : "none";
+  const char* kChoices = "option 'weight' must be auto, none, f, inverse_std or inverse_magnitude";
+  if (o.contains("weight") && !o["weight"].is_string()) throw std::invalid_argument(kChoices);
+  std::string weight = o.contains("weight") ? o["weight"].get<std::string>() : default_weight;
+  if (weight == "auto") weight = frf.variance.size() ? "inverse_std" : "none";
+  const int element = (out - 1) + frf.NumOutputs() * (in - 1);
+  // A zero variance (a noise-free line, coherence 1) would give an infinite weight: floor it at
+  // 10^-12 of the largest variance of the element.
+  double floor = 0.0;
+  if (weight == "inverse_std") {
+    if (!frf.variance.size()) throw std::invalid_argument("weight=inverse_std needs an FRF with a variance (time record input)");
+    for (int k : keep) floor = std::max(floor, frf.variance(k, element));
+    floor *= 1e-12;
+    if (!(floor > 0.0)) weight = "none";  // every line noise-free: nothing to weight by
+  }
   for (size_t i = 0; i < keep.size(); ++i) {
     w(i) = frf.omega(keep[i]);
     h(i) = frf.h[keep[i]](out - 1, in - 1);
@@ -132,15 +165,14 @@ Frf SisoElement(const Frf& frf, const json& o, Eigen::VectorXd* weights) {
       wt(i) = 1.0 / std::abs(h(i));
     }
     else if (weight == "inverse_std") {
-      if (!frf.variance.size()) throw std::invalid_argument("weight=inverse_std needs an FRF with a variance (time record input)");
-      const double v = frf.variance(keep[i], (out - 1) + frf.NumOutputs() * (in - 1));
-      wt(i) = 1.0 / std::sqrt(std::max(v, 1e-300));
+      wt(i) = 1.0 / std::sqrt(std::max(frf.variance(keep[i], element), floor));
     } else if (weight != "none") {
-      throw std::invalid_argument("option 'weight' must be none, f, inverse_std or inverse_magnitude");
+      throw std::invalid_argument(kChoices);
     }
   }
   *weights = wt.allFinite() ? wt : Eigen::VectorXd();
   if (weight == "none") *weights = Eigen::VectorXd();
+  if (used) *used = weight;
   return MakeSisoFrf(w, h);
 }
 
@@ -155,16 +187,19 @@ json Complexes(const Eigen::VectorXcd& v) {
 MethodReport Rational(const MethodInput& input, const json& o, bool stable) {
   const char* name = stable ? "stable-nls" : "levy-sk";
   CheckOptionKeys(o, Keys({"order", "numerator_degree", "sk_iterations", "square_numerator",
-                           "max_function_evaluations"}), name);
+                           "max_function_evaluations", "refine"}), name);
   const int n = GetInt(o, "order", 0);
   if (n < 1) throw std::invalid_argument(std::string(name) + " needs --order n (denominator degree, >= 1)");
   const int m = GetInt(o, "numerator_degree", n - 1);
   const LoadedFrf loaded = Load(input, o);
   Eigen::VectorXd weights;
-  const Frf frf = SisoElement(loaded.frf, o, &weights);
+  std::string weight_used;
+  const Frf frf = SisoElement(loaded.frf, o, &weights, &weight_used);
   MethodReport report;
+  report.record_sample_time = loaded.sample_time;
   json& j = report.json;
   json d;
+  d["weight"] = weight_used;
   TransferFunction model;
   Eigen::VectorXcd poles;
   std::ostringstream t;
@@ -175,6 +210,8 @@ MethodReport Rational(const MethodInput& input, const json& o, bool stable) {
     lo.numerator_degree = m;
     lo.max_sk_iterations = GetInt(o, "sk_iterations", 30);
     lo.weights = weights;
+    lo.refine_output_error = GetBool(o, "refine", true);  // ML with w = 1/σ (levy.h)
+    lo.max_function_evaluations = GetInt(o, "max_function_evaluations", lo.max_function_evaluations);
     const LevyResult r = FitLevy(frf, lo);
     model = r.model;
     poles = r.poles;
@@ -183,6 +220,8 @@ MethodReport Rational(const MethodInput& input, const json& o, bool stable) {
     j["fit_percent"] = r.fit_percent;
     d["sk_iterations"] = r.sk_iterations;
     d["sk_converged"] = r.sk_converged;
+    d["refined"] = r.refined;
+    d["sk_cost"] = r.sk_cost;
     d["relative_change"] = r.relative_change;
     d["cost_history"] = r.cost_history;
     d["stable"] = r.stable;
@@ -213,6 +252,7 @@ MethodReport Rational(const MethodInput& input, const json& o, bool stable) {
   j["model"] = ModelToJson(model);
   d["poles"] = Complexes(poles);
   d["frf_source"] = loaded.source;
+  d["zoh_correction"] = loaded.zoh_corrected;
   d["lines"] = frf.NumLines();
   j["details"] = d;
   t << "  lines " << frf.NumLines() << " (" << loaded.source << "), fit " << j["fit_percent"].get<double>()
@@ -232,7 +272,7 @@ MethodReport PoleResidue(const MethodInput& input, const json& o) {
                            "max_residual_poles", "max_function_evaluations"}), "pole-residue");
   const LoadedFrf loaded = Load(input, o);
   Eigen::VectorXd weights;
-  const Frf frf = SisoElement(loaded.frf, o, &weights);
+  const Frf frf = SisoElement(loaded.frf, o, &weights, nullptr, "none");  // pole-residue: unweighted unless asked
   PoleResidueOptions po;
   po.peak_tolerance = GetDouble(o, "peak_tolerance", po.peak_tolerance);
   po.fictitious_poles = GetBool(o, "fictitious_poles", true);
@@ -255,6 +295,7 @@ MethodReport PoleResidue(const MethodInput& input, const json& o) {
   }
   const PoleResidueResult r = FitPoleResidue(frf, po);
   MethodReport report;
+  report.record_sample_time = loaded.sample_time;
   json& j = report.json;
   j["model"] = ModelToJson(PoleResidueTransferFunction(r));
   j["status"] = ToString(r.status);

@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "core/io/csv.h"
+#include "core/methods/report_checks.h"
 
 namespace idrig {
 
@@ -35,8 +36,10 @@ const MethodInfo& FindMethod(const std::string& name) {
 }
 
 namespace {
-MethodReport Finish(const MethodInfo& info, MethodReport report) {
+MethodReport Finish(const MethodInfo& info, MethodReport report, double sample_time, double min_fit) {
   report.json["method"] = info.name;
+  if (sample_time > 0.0 && !(report.record_sample_time > 0.0)) report.record_sample_time = sample_time;
+  ApplyModelChecks(&report, min_fit);
   return report;
 }
 }  // namespace
@@ -44,6 +47,8 @@ MethodReport Finish(const MethodInfo& info, MethodReport report) {
 MethodReport RunMethod(const std::string& name, const std::string& data_path,
                        const nlohmann::json& options) {
   const MethodInfo& info = FindMethod(name);
+  nlohmann::json method_options = options;
+  const double min_fit = TakeMinFitOption(&method_options);
   MethodInput input;
   input.path = data_path;
   IoRecord record;
@@ -51,7 +56,7 @@ MethodReport RunMethod(const std::string& name, const std::string& data_path,
     record = ReadIoRecordCsv(data_path);
     input.record = &record;
   }
-  return Finish(info, info.run(input, options));
+  return Finish(info, info.run(input, method_options), info.needs_record ? record.sample_time : 0.0, min_fit);
 }
 
 MethodReport RunMethod(const std::string& name, const IoRecord& record,
@@ -60,9 +65,11 @@ MethodReport RunMethod(const std::string& name, const IoRecord& record,
   if (!info.needs_record)
     throw std::invalid_argument("method '" + name + "' reads its data from a file, not a time record");
   ValidateIoRecord(record);
+  nlohmann::json method_options = options;
+  const double min_fit = TakeMinFitOption(&method_options);
   MethodInput input;
   input.record = &record;
-  return Finish(info, info.run(input, options));
+  return Finish(info, info.run(input, method_options), record.sample_time, min_fit);
 }
 
 void CheckOptionKeys(const nlohmann::json& options, const std::vector<std::string>& known,

@@ -24,6 +24,10 @@ struct MethodInput {
 struct MethodReport {
   nlohmann::json json;
   std::string text;
+  // For the plausibility checks RunMethod applies to every report (report_checks.h):
+  bool expect_stable = true;       // false: the method identifies unstable plants on purpose
+  double record_sample_time = 0.0; // Ts of the time record the model came from, when the
+                                   // runner read one itself (RunMethod knows it otherwise)
 };
 
 struct MethodInfo {
@@ -36,7 +40,9 @@ struct MethodInfo {
 const std::vector<MethodInfo>& Methods();
 // Throws std::invalid_argument listing the known methods when `name` is unknown.
 const MethodInfo& FindMethod(const std::string& name);
-// Reads the record when the method needs one, runs it, adds "method" to the report.
+// Reads the record when the method needs one, runs it, adds "method" to the report, and checks
+// the model (unstable, pole at Nyquist, poor fit: report_checks.h), which may lower "status"
+// and adds "warnings". The option min_fit_percent (default 50) is taken by RunMethod itself.
 MethodReport RunMethod(const std::string& name, const std::string& data_path,
                        const nlohmann::json& options);
 MethodReport RunMethod(const std::string& name, const IoRecord& record,

@@ -157,7 +157,7 @@ MethodReport RunStepProny(const MethodInput& input, const json& o) {
 
   std::ostringstream t;
   t << std::setprecision(6);
-  t << "Step response, multiple poles (seed 000, Vidincev): " << r.message << ", status " << ToString(r.status) << "\n";
+  t << "Step response, multiple poles (seed 000, Vidincev): " << r.message << ", solver status " << ToString(r.status) << "\n";
   t << "step C = " << r.step_amplitude << " at t = " << r.step_time << " s; x(inf) = " << r.x_inf << " (tail "
     << r.x_inf_tail << ", model " << r.x_inf_model << "); h = " << r.h << " s, B = " << r.blocks << ", averaging "
     << ToString(r.averaging) << ", solver " << ToString(r.solver) << "\n";
@@ -264,7 +264,7 @@ MethodReport RunModalPolyref(const MethodInput& input, const json& o) {
 
   std::ostringstream t;
   t << std::setprecision(6);
-  t << "MIMO modal identification from impulse responses (seed 002 section 5, Balda): " << r.message << ", status "
+  t << "MIMO modal identification from impulse responses (seed 002 section 5, Balda): " << r.message << ", solver status "
     << ToString(r.status) << "\n";
   t << "G(kT) (" << r.outputs << " outputs x " << r.inputs << " inputs, " << fir_length << " samples) estimated by "
     << fir.method << " (FIR fit " << fir.fit_percent << " %)\n\n";

@@ -18,6 +18,11 @@ expect "persistently exciting" "$idrig" identify --data "$dir/const.csv" --order
 expect "equations" "$idrig" identify --data "$dir/short.csv" --order 15
 expect "unknown method 'nope'" "$idrig" identify --data "$dir/short.csv" --method nope
 expect "unknown option 'ordr'" "$idrig" identify --data "$dir/short.csv" --option ordr=3
+expect "option 'min_fit_percent' must be a number" "$idrig" identify --data "$dir/short.csv" --order 2 --option min_fit_percent=high
+"$idrig" example --out "$dir/prbs.csv" --samples 600 --noise 0
+expect "not a multisine test signal (5)" "$idrig" identify --data "$dir/prbs.csv" --method finite-frequency --order 2
+printf 'f_hz,re,im,sigma\n1,1,0,0.1\n2,0.5,0,0\n' > "$dir/sigma.csv"
+expect "field 4 (sigma) must be > 0" "$idrig" identify --data "$dir/sigma.csv" --method levy-sk --order 1
 echo '{"format":"idrig.model/1","kind":"tf"' > "$dir/bad.json"
 expect "not valid JSON" "$idrig" simulate --model "$dir/bad.json" --data "$dir/short.csv"
 exit $status

@@ -201,6 +201,18 @@ TEST(Pipeline, ExperimentToModelsInTheCatalogue) {
   int64_t done = 0;
   for (auto& w : p.workers) done += w->jobs_done();
   EXPECT_EQ(done, 2);
+  // Issue 15: the catalogue keeps the status the checks gave, not "ok". No fit reaches 100 %,
+  // so a threshold of 100.5 % must give poor_fit, with the warning in the stored report.
+  Catalog reader(p.catalog_path);
+  EXPECT_EQ(reader.ModelForRequest(9002)->status, "ok");
+  RequestModel(*p.transport, 9003, 101, "arx", "{\"order\":3,\"min_fit_percent\":100.5}");
+  ASSERT_TRUE(p.RunUntil([&] { return reader.ModelForRequest(9003).has_value(); }, 20.0));
+  const ModelRecord poor = *reader.ModelForRequest(9003);
+  EXPECT_EQ(poor.status, "poor_fit");
+  const nlohmann::json report = nlohmann::json::parse(poor.report_json);
+  EXPECT_EQ(report["status"], "poor_fit");
+  ASSERT_EQ(report["warnings"].size(), 1u) << report["warnings"];
+  EXPECT_NE(report["warnings"][0].get<std::string>().find("poor fit"), std::string::npos);
 }
 
 // Issue 7's service path: the simulated rig has a dead zone the sim model lacks; the diagnose

@@ -6,8 +6,11 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+
+#include "core/numeric/validation.h"
 
 namespace idrig {
 
@@ -333,7 +336,17 @@ FiniteFrequencyResult IdentifyFiniteFrequency(const IoRecord& record,
   if (record.NumInputs() != 1 || record.NumOutputs() != 1)
     Fail("the method is SISO: the record has " + std::to_string(record.NumInputs()) +
          " inputs and " + std::to_string(record.NumOutputs()) + " outputs");
-  return IdentifyFiniteFrequency(record.y.col(0), record.sample_time, options, record.u.col(0));
+  FiniteFrequencyResult result =
+      IdentifyFiniteFrequency(record.y.col(0), record.sample_time, options, record.u.col(0));
+  // Simulation fit of the model on the record (from rest, the input held between samples).
+  // With λ > 0 the record's input is ũ = u·e^(λt) and w(s) may be unstable: no fit.
+  result.fit_percent = std::numeric_limits<double>::quiet_NaN();
+  if (options.lambda == 0.0 && result.status != SolverStatus::kFailed && result.model.den.allFinite() &&
+      result.model.num.allFinite()) {
+    const Eigen::MatrixXd sim = Simulate(LtiModel(result.model), record.u, record.sample_time);
+    result.fit_percent = FitPercent(record.y, sim)(0);
+  }
+  return result;
 }
 
 FiniteFrequencyResult IdentifyFiniteFrequency(const Eigen::VectorXd& y, double sample_time,
@@ -415,8 +428,18 @@ FiniteFrequencyResult IdentifyFiniteFrequency(const Eigen::VectorXd& y, double s
       e.tau = p.tau;
       e.alpha = p.alpha;
       e.beta = p.beta;
+      if (options.zoh_correction) {
+        for (int l = 0; l < lines; ++l) {
+          // Z(s) = (1 − e^(−sh))/(sh) at s = λ + jω_l: the hold's response (half-sample delay).
+          const std::complex<double> s(options.lambda, omegas[l]), sh = s * sample_time;
+          const std::complex<double> z = std::abs(sh) < 1e-8 ? 1.0 - 0.5 * sh : (1.0 - std::exp(-sh)) / sh;
+          const std::complex<double> g = std::complex<double>(p.alpha[l], p.beta[l]) / z;
+          e.alpha[l] = g.real();
+          e.beta[l] = g.imag();
+        }
+      }
       // Operation (в): frequency equations (12) at τ = q·T_b.
-      const FrequencyEquationsResult solved = SolveFrequencyEquations(omegas, p.alpha, p.beta, n, gamma);
+      const FrequencyEquationsResult solved = SolveFrequencyEquations(omegas, e.alpha, e.beta, n, gamma);
       e.d = solved.d;
       e.k = solved.k;
       e.condition_number = solved.condition_number;

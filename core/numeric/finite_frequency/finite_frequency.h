@@ -141,6 +141,12 @@ struct FiniteFrequencyOptions {
   // input_bound is rejected before anything else (std::invalid_argument).
   double input_bound = 0.0;
   double output_bound = 0.0;
+  // The record's input was held between samples (a zero-order hold, as a rig's actuator or
+  // `idrig simulate` holds it): the filter (6) then measures w(s)·Z(s) at s = λ + jω_k, with
+  // Z(s) = (1 − e^(−sh))/(sh) (= e^(−jωh/2)·sin(ωh/2)/(ωh/2) for λ = 0), a half-sample delay.
+  // true: α_k + jβ_k are divided by Z before (12), exactly per line. false: the paper's
+  // continuous sine generators (no hold).
+  bool zoh_correction = false;
 };
 
 struct FiniteFrequencyEstimate {
@@ -160,7 +166,8 @@ struct FiniteFrequencyResult : ResultBase {
   bool stopping_rule_met = false;
   bool bound_reached = false;  // note 6.1: a bound cut the record short
   double record_used_s = 0.0;  // seconds of record before any bound violation
-  std::vector<FiniteFrequencyEstimate> history;  // one per base period (live display)
+  std::vector<FiniteFrequencyEstimate> history;  // one per base period (live display); α, β
+                                                 // after the ZOH correction when it is on
 };
 
 // Algorithm 2.1 of [Aleksandrov] on a record whose input is the test signal (5) (ũ for λ > 0)

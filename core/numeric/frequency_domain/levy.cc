@@ -1,6 +1,9 @@
 #include "core/numeric/frequency_domain/levy.h"
 
+#include <unsupported/Eigen/LevenbergMarquardt>
+
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -26,6 +29,55 @@ Complex PolyAsc(const Eigen::VectorXd& c, Complex x) {
   for (int j = static_cast<int>(c.size()) - 1; j >= 0; --j) v = v * x + c(j);
   return v;
 }
+
+// Weighted output error r_k = w_k (B(p̃_k)/A(p̃_k) − G_k) of the scaled coefficients
+// x = [ã_0 … ã_{n−1} | b̃_0 … b̃_m] (ã_n = 1), real and imaginary parts stacked; the Jacobian
+// ∂r/∂ã_j = −w B p̃^j / A², ∂r/∂b̃_j = w p̃^j / A.
+struct OutputErrorFunctor : Eigen::DenseFunctor<double> {
+  OutputErrorFunctor(int n, int m, const Eigen::VectorXcd& p, const Eigen::VectorXcd& g, const Eigen::VectorXd& w)
+      : Eigen::DenseFunctor<double>(n + m + 1, 2 * static_cast<int>(p.size())), n(n), m(m), p(p), g(g), w(w) {}
+  int n, m;
+  const Eigen::VectorXcd &p, &g;
+  const Eigen::VectorXd& w;
+  void Split(const Eigen::VectorXd& x, Eigen::VectorXd* a, Eigen::VectorXd* b) const {
+    a->resize(n + 1);
+    a->head(n) = x.head(n);
+    (*a)(n) = 1.0;
+    *b = x.tail(m + 1);
+  }
+  int operator()(const Eigen::VectorXd& x, Eigen::VectorXd& fvec) const {
+    Eigen::VectorXd a, b;
+    Split(x, &a, &b);
+    const int lines = static_cast<int>(p.size());
+    for (int k = 0; k < lines; ++k) {
+      const Complex r = w(k) * (PolyAsc(b, p(k)) / PolyAsc(a, p(k)) - g(k));
+      fvec(k) = r.real();
+      fvec(lines + k) = r.imag();
+    }
+    return 0;
+  }
+  int df(const Eigen::VectorXd& x, Eigen::MatrixXd& jac) const {
+    Eigen::VectorXd a, b;
+    Split(x, &a, &b);
+    const int lines = static_cast<int>(p.size());
+    for (int k = 0; k < lines; ++k) {
+      const Complex av = PolyAsc(a, p(k)), bv = PolyAsc(b, p(k));
+      const Complex da = -w(k) * bv / (av * av), db = w(k) / av;
+      Complex pj = 1.0;
+      for (int j = 0; j <= std::max(n - 1, m); ++j, pj *= p(k)) {
+        if (j < n) {
+          jac(k, j) = (da * pj).real();
+          jac(lines + k, j) = (da * pj).imag();
+        }
+        if (j <= m) {
+          jac(k, n + j) = (db * pj).real();
+          jac(lines + k, n + j) = (db * pj).imag();
+        }
+      }
+    }
+    return 0;
+  }
+};
 }  // namespace
 
 double FrfCost(const Frf& frf, const Eigen::VectorXcd& model, const Eigen::VectorXd& weights) {
@@ -37,11 +89,12 @@ double FrfCost(const Frf& frf, const Eigen::VectorXcd& model, const Eigen::Vecto
   return cost;
 }
 
-double FrfFitPercent(const Frf& frf, const Eigen::VectorXcd& model) {
+double FrfFitPercent(const Frf& frf, const Eigen::VectorXcd& model, const Eigen::VectorXd& weights) {
   double r = 0.0, g = 0.0;
   for (int k = 0; k < frf.NumLines(); ++k) {
-    r += std::norm(model(k) - frf.h[k](0, 0));
-    g += std::norm(frf.h[k](0, 0));
+    const double w2 = weights.size() ? weights(k) * weights(k) : 1.0;
+    r += w2 * std::norm(model(k) - frf.h[k](0, 0));
+    g += w2 * std::norm(frf.h[k](0, 0));
   }
   return g > 0.0 ? 100.0 * (1.0 - std::sqrt(r / g)) : 0.0;
 }
@@ -150,6 +203,29 @@ LevyResult FitLevy(const Frf& frf, const LevyOptions& options) {
       break;
     }
   }
+  result.sk_cost = result.cost_history.back();
+  bool refine_stopped = false;
+  if (options.refine_output_error && a.allFinite() && b.allFinite()) {
+    OutputErrorFunctor functor(n, m, p, g, w);
+    Eigen::VectorXd x(n + m + 1);
+    x << a.head(n), b;
+    Eigen::LevenbergMarquardt<OutputErrorFunctor> lm(functor);
+    lm.setMaxfev(options.max_function_evaluations);
+    lm.setFtol(1e-12);
+    lm.setXtol(1e-12);
+    const auto status = lm.minimize(x);
+    Eigen::VectorXd a_r, b_r;
+    functor.Split(x, &a_r, &b_r);
+    const double cost = x.allFinite() ? FrfCost(frf, response(a_r, b_r), w) : std::numeric_limits<double>::infinity();
+    result.refine_iterations = static_cast<int>(lm.iterations());
+    if (cost < result.sk_cost) {
+      a = a_r;
+      b = b_r;
+      result.refined = true;
+      result.cost_history.push_back(cost);
+      refine_stopped = status == Eigen::LevenbergMarquardtSpace::TooManyFunctionEvaluation;
+    }
+  }
   // Unscale: a_j = ã_j / ω_s^j, then make the denominator monic again.
   Eigen::VectorXd a_u(n + 1), b_u(m + 1);
   for (int j = 0; j <= n; ++j) a_u(j) = a(j) / std::pow(ws, j);
@@ -157,10 +233,10 @@ LevyResult FitLevy(const Frf& frf, const LevyOptions& options) {
   const double lead = a_u(n);
   result.model.den = a_u.reverse() / lead;
   result.model.num = b_u.reverse() / lead;
-  result.iterations = 1 + result.sk_iterations;
+  result.iterations = 1 + result.sk_iterations + result.refine_iterations;
   const Eigen::VectorXcd fitted = response(a, b);
   result.final_cost = FrfCost(frf, fitted, w);
-  result.fit_percent = FrfFitPercent(frf, fitted);
+  result.fit_percent = FrfFitPercent(frf, fitted, w);
   if (!result.model.den.allFinite() || !result.model.num.allFinite()) {
     result.status = SolverStatus::kFailed;
     result.message = "the regression produced non-finite coefficients";
@@ -168,7 +244,11 @@ LevyResult FitLevy(const Frf& frf, const LevyOptions& options) {
   }
   result.poles = PolynomialRoots(result.model.den);
   result.stable = (result.poles.real().array() < 0.0).all();
-  if (!result.sk_converged) {
+  if (refine_stopped) {
+    result.status = SolverStatus::kNotConverged;
+    result.message = "the output-error refinement stopped at the function-evaluation limit (" +
+                     std::to_string(options.max_function_evaluations) + ")";
+  } else if (!result.sk_converged && !result.refined) {
     result.status = SolverStatus::kNotConverged;
     result.message = "Sanathanan-Koerner iterations did not settle in " +
                      std::to_string(options.max_sk_iterations) + " iterations (last relative change " +
@@ -180,7 +260,12 @@ LevyResult FitLevy(const Frf& frf, const LevyOptions& options) {
     result.status = SolverStatus::kOk;
     result.message = options.max_sk_iterations == 0
                          ? "plain Levy solution"
-                         : "SK converged after " + std::to_string(result.sk_iterations) + " iterations";
+                         : (result.sk_converged ? "SK converged after " : "SK stopped after ") +
+                               std::to_string(result.sk_iterations) + " iterations";
+    if (result.refined)
+      result.message += ", then the output error minimised (" + std::to_string(result.refine_iterations) +
+                        " Levenberg-Marquardt iterations, cost " + std::to_string(result.sk_cost) + " -> " +
+                        std::to_string(result.cost_history.back()) + ")";
   }
   if (!result.stable) result.message += "; the model is unstable (a pole has Re s >= 0)";
   return result;

@@ -26,6 +26,14 @@ struct LevyOptions {
   int max_sk_iterations = 30;          // 0: plain Levy only
   double coefficient_tolerance = 1e-9; // stop when the scaled coefficients change less (relative)
   Eigen::VectorXd weights;             // optional measurement weights w_k > 0 (empty: all 1)
+  // After SK, minimise the weighted output error Σ w_k²|B/A(p_k) − G_k|² itself by
+  // Levenberg–Marquardt (analytic Jacobian) from the SK coefficients. The SK fixed point is not
+  // the minimum of that cost (the weight 1/|A_prev| is held fixed in each step, so its
+  // derivative is missing from the normal equations); with w_k = 1/σ_k the minimum is the
+  // maximum-likelihood estimate under complex Gaussian noise and reaches the Cramér–Rao bound
+  // (docs/frequency.md). Kept only when it lowers the cost.
+  bool refine_output_error = false;
+  int max_function_evaluations = 2000;
 };
 
 struct LevyResult : ResultBase {
@@ -37,7 +45,11 @@ struct LevyResult : ResultBase {
   double relative_change = 0.0; // last relative coefficient change
   // Output error Σ w_k²|G_m(p_k) − G_k|² after each stage: [0] plain Levy, [l] SK iteration l.
   std::vector<double> cost_history;
-  // final_cost = Σ w²|r|²; fit_percent = 100(1 − ‖r‖/‖g‖) on the FRF itself.
+  bool refined = false;         // the output-error refinement ran and lowered the cost
+  double sk_cost = 0.0;         // Σ w²|r|² at the SK solution (before the refinement)
+  int refine_iterations = 0;
+  // final_cost = Σ w²|r|²; fit_percent = 100(1 − ‖w·r‖/‖w·g‖) on the FRF itself, weighted
+  // like the cost (with w = 1/σ, lines the input did not excite count as little as they should).
 };
 
 // Throws std::invalid_argument for an invalid FRF (not SISO, ω <= 0, NaN), degrees < 0 / n < 1,
@@ -47,6 +59,7 @@ LevyResult FitLevy(const Frf& frf, const LevyOptions& options);
 
 // Output error helpers shared by the frequency methods.
 double FrfCost(const Frf& frf, const Eigen::VectorXcd& model_response, const Eigen::VectorXd& weights);
-double FrfFitPercent(const Frf& frf, const Eigen::VectorXcd& model_response);
+double FrfFitPercent(const Frf& frf, const Eigen::VectorXcd& model_response,
+                     const Eigen::VectorXd& weights = Eigen::VectorXd());
 
 }  // namespace idrig

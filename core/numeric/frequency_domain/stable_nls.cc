@@ -234,7 +234,7 @@ StableNlsResult FitStableNls(const Frf& frf, const StableNlsOptions& options) {
   result.final_cost = fvec.squaredNorm();
   Eigen::VectorXcd fitted(lines);
   for (int k = 0; k < lines; ++k) fitted(k) = functor.Model(x, k);
-  result.fit_percent = FrfFitPercent(frf, fitted);
+  result.fit_percent = FrfFitPercent(frf, fitted, w);
   if (!result.model.den.allFinite() || lead == 0.0) {
     result.status = SolverStatus::kFailed;
     result.message = "a denominator section degenerated (leading coefficient 0)";

@@ -198,14 +198,16 @@ Eigen::VectorXd OneStepResiduals(ConstVec y, ConstVec u,
 // Steiglitz–McBride iterations (Ljung, System Identification, 2nd ed., §10.4): refit on u, y
 // prefiltered by 1/Â(q); the fixed point is the output-error estimate, which is unbiased under
 // white output noise where equation-error ARX is not. Returns the number of fits made.
+// *last_change: relative change of g in the last fit (0 when no refinement ran).
 int RefineOutputError(ConstVec y, ConstVec u, int order,
-                      const ArxOptions& options, Eigen::VectorXd* g);
+                      const ArxOptions& options, Eigen::VectorXd* g, double* last_change);
 
 struct Fit {
   TriangleSolve solve;
   EquationPlan plan;
   Eigen::VectorXd c, d;
   int iterations = 1;
+  double oe_change = 0.0;  // relative change of g in the last Steiglitz–McBride fit
 };
 
 Fit FitOrder(ConstVec y, ConstVec u, int order,
@@ -218,15 +220,17 @@ Fit FitOrder(ConstVec y, ConstVec u, int order,
          std::to_string(y.size()) + " samples, q = " + std::to_string(options.decimation) + ")");
   const Eigen::MatrixXd triangle = TriangleOfEquations(y, u, fit.plan);
   fit.solve = SolveFromTriangle(triangle, fit.plan.count, options.epsilon);
-  if (options.oe_iterations > 0) fit.iterations = RefineOutputError(y, u, order, options, &fit.solve.g);
+  if (options.oe_iterations > 0)
+    fit.iterations = RefineOutputError(y, u, order, options, &fit.solve.g, &fit.oe_change);
   fit.c = -fit.solve.g.head(order);
   fit.d = fit.solve.g.tail(order);
   return fit;
 }
 
 int RefineOutputError(ConstVec y, ConstVec u, int order,
-                      const ArxOptions& options, Eigen::VectorXd* g) {
+                      const ArxOptions& options, Eigen::VectorXd* g, double* last_change) {
   int fits = 1;
+  *last_change = 0.0;
   for (int it = 0; it < options.oe_iterations; ++it) {
     const Eigen::VectorXd c_now = StabilisedDenominator(-g->head(order));
     const Eigen::VectorXd uf = FilterByInverseA(u, c_now), yf = FilterByInverseA(y, c_now);
@@ -235,6 +239,7 @@ int RefineOutputError(ConstVec y, ConstVec u, int order,
     const double change = (refit.g - *g).norm() / std::max(1e-300, g->norm());
     *g = refit.g;
     ++fits;
+    *last_change = change;
     if (change < 1e-10) break;
   }
   return fits;
@@ -389,6 +394,17 @@ ArxResult IdentifyArx(const IoRecord& record, const ArxOptions& options) {
     result.message = "F_L is ill-conditioned (cond " + std::to_string(result.condition_number) +
                      ") and epsilon = 0: the solution is not determined; use epsilon > 0";
   }
+  result.oe_relative_change = fit.oe_change;
+  std::string not_converged;
+  if (options.oe_iterations > 0 && !(fit.oe_change <= options.oe_tolerance)) {
+    result.status = SolverStatus::kNotConverged;
+    std::ostringstream m;
+    m << "the Steiglitz-McBride iterations did not converge: the parameters still changed by "
+      << fit.oe_change << " (relative) in the last of " << options.oe_iterations
+      << " fits (tolerance " << options.oe_tolerance << "); raise oe_iterations or lower the order";
+    not_converged = m.str();
+    result.warnings.push_back(not_converged);
+  }
 
   // Steps 4–7: R* by (1.16), R1* by (1.7), W(p) by (1.3)–(1.4).
   if (options.recover_continuous) {
@@ -427,6 +443,7 @@ ArxResult IdentifyArx(const IoRecord& record, const ArxOptions& options) {
       << " (" << result.epsilon_rule << "), fit " << result.fit_percent << " %";
     result.message = m.str();
   }
+  if (!not_converged.empty()) result.message += "; " + not_converged;
   return result;
 }
 

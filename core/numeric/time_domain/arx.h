@@ -35,6 +35,7 @@ struct ArxOptions {
   // Output-error refinement by Steiglitz–McBride iterations (refit on data prefiltered by
   // 1/Â(q)): removes the bias of equation-error ARX under output noise. 0: plain ARX.
   int oe_iterations = 0;
+  double oe_tolerance = 1e-6;  // converged when the last fit changes g by less (relative)
   bool recover_continuous = true;
   int log_series_terms = 0;  // terms of (1.16); 0: sum to machine precision
   // Simulation fit and residual tests on the record (skip for raw estimation speed).
@@ -65,6 +66,7 @@ struct ArxResult : ResultBase {
   Eigen::MatrixXd covariance; // of g (σ² (F'F+εE)⁻¹ F'F (F'F+εE)⁻¹)
   Eigen::VectorXd g_std;      // square roots of the diagonal
   double noise_variance = 0.0;
+  double oe_relative_change = 0.0;  // of g in the last Steiglitz–McBride fit (arx-oe)
 
   // The five equivalent forms.
   TransferFunction discrete_tf;     // W(z), Eq. (1.14)

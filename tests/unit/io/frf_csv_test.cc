@@ -40,6 +40,23 @@ TEST(FrfCsv, RoundTrip) {
   std::remove(path.c_str());
 }
 
+// A noise sigma per line (issue 15): sigma / sigma_<o>_<i> columns become the variance σ².
+TEST(FrfCsv, SigmaColumnsGiveTheVariance) {
+  const Frf f = ParseFrfCsv("f_hz,re,im,sigma\n1,0.5,-0.25,0.01\n2,0.1,0.2,0.002\n");
+  ASSERT_EQ(f.variance.rows(), 2);
+  EXPECT_DOUBLE_EQ(f.variance(0, 0), 1e-4);
+  EXPECT_DOUBLE_EQ(f.variance(1, 0), 4e-6);
+  const Frf m = ParseFrfCsv("w_rad_s,re_1_1,im_1_1,sigma_1_1,re_2_1,im_2_1,sigma_2_1\n3,1,0,0.1,2,0,0.2\n");
+  ASSERT_EQ(m.variance.cols(), 2);
+  EXPECT_DOUBLE_EQ(m.variance(0, 1), 0.04);  // column out + ny·in
+  const std::string path = ::testing::TempDir() + "/frf_sigma.csv";
+  WriteFrfCsv(f, path);
+  const Frf g = ReadFrfCsv(path);
+  EXPECT_NEAR((g.variance - f.variance).norm(), 0.0, 1e-18);
+  std::remove(path.c_str());
+  EXPECT_EQ(ParseFrfCsv("f_hz,re,im\n1,1,1\n").variance.size(), 0);
+}
+
 void ExpectError(const std::string& text, const std::string& fragment) {
   try {
     ParseFrfCsv(text, "x.csv");
@@ -60,6 +77,10 @@ TEST(FrfCsv, BadInput) {
   ExpectError("f_hz,re,im\n1,1,nan\n", "NaN");
   ExpectError("f_hz,re_1_1,im_1_1,re_2_2,im_2_2\n1,1,1,1,1\n", "output 1, input 2");
   ExpectError("f_hz,re,im\n", "no data rows");
+  ExpectError("f_hz,re,im,sigma\n1,1,1,0\n", "x.csv:2: field 4 (sigma) must be > 0");
+  ExpectError("f_hz,re,im,sigma,sigma\n1,1,1,1,1\n", "duplicate column 'sigma'");
+  ExpectError("f_hz,re_1_1,im_1_1,sigma_1_1,re_2_1,im_2_1\n1,1,1,1,1,1\n", "no sigma column for output 2, input 1");
+  ExpectError("f_hz,re,im,sigma_x\n1,1,1,1\n", "must be named sigma_<output>_<input>");
   EXPECT_THROW(ReadFrfCsv("/nonexistent/frf.csv"), std::invalid_argument);
 }
 

@@ -66,6 +66,32 @@ TEST(CsvBadInput, EachProblemIsNamed) {
   ExpectError("t,u,y\n0,1,2\n1,1,2\n2.5,1,2\n3.5,1,2\n", "not uniform");
 }
 
+// The one-pass parser (csv_scan.h) reads numbers as strtod did: signs, exponents, CRLF line
+// ends, quotes and spaces around fields, comment and blank lines, a last line without '\n'.
+TEST(Csv, NumberFormsAndLineEndsAsBefore) {
+  const IoRecord r = ParseIoRecordCsv(
+      "# comment\r\n\"t\", u , y\r\n\r\n+0,-1.5e0,\"2\"\r\n# inside\r\n1.0,+.25,  -3E-1 \r\n2,1e2,4.");
+  ASSERT_EQ(r.NumSamples(), 3);
+  EXPECT_EQ(r.u(0, 0), -1.5);
+  EXPECT_EQ(r.u(1, 0), 0.25);
+  EXPECT_EQ(r.y(1, 0), -0.3);
+  EXPECT_EQ(r.u(2, 0), 100.0);
+  EXPECT_EQ(r.y(2, 0), 4.0);
+  EXPECT_DOUBLE_EQ(r.sample_time, 1.0);
+  // Out of range: strtod's ±HUGE_VAL, then named as Inf; "+-1" and "1.5x" are not numbers.
+  ExpectError("t,u,y\n0,1,2\n1,1e999,2\n", "Inf in input column 'u' at sample 1");
+  ExpectError("t,u,y\n0,1,2\n1,+-1,2\n", "line 3, column 'u': '+-1' is not a number");
+  ExpectError("t,u,y\n0,1,2\n1,1.5x,2\n", "line 3, column 'u': '1.5x' is not a number");
+  ExpectError("t,u,y\n0,1,2\n1,1,2,\n", "line 3 has 4 fields, the header has 3");
+  // The same text from a file (one read) gives the same record.
+  const std::string path = ::testing::TempDir() + "/csv_forms.csv";
+  std::ofstream("" + path) << "t,u,y\n0,1,2\n0.5,3,4\n";
+  const IoRecord f = ReadIoRecordCsv(path);
+  EXPECT_EQ(f.NumSamples(), 2);
+  EXPECT_EQ(f.y(1, 0), 4.0);
+  std::remove(path.c_str());
+}
+
 TEST(CsvBadInput, UnreadableFile) {
   EXPECT_THROW(ReadIoRecordCsv("/nonexistent/dir/rec.csv"), std::invalid_argument);
 }
