@@ -12,4 +12,5 @@ void RegisterExciteCommand(CLI::App& app);  // cmd_excite.cc
 void RegisterServiceCommands(CLI::App& app);
 void SetCommandLine(int argc, char** argv);
 void RegisterGapCommand(CLI::App& app);     // cmd_gap.cc
+void RegisterServeCommand(CLI::App& app);   // cmd_serve.cc: the dashboard
 }  // namespace idrig

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   idrig::RegisterServiceCommands(app);
   idrig::SetCommandLine(argc, argv);
   idrig::RegisterGapCommand(app);
+  idrig::RegisterServeCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
