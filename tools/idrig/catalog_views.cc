@@ -249,8 +249,19 @@ json BodeJson(const ModelRecord& m) {
   }
   const json report = json::parse(m.report_json, nullptr, false);
   const json* details = report.is_object() && report.contains("details") ? &report["details"] : nullptr;
-  const bool has_band = details && details->contains("covariance") && details->contains("g") &&
-                        m.sample_time_s > 0 && (*details)["g"].size() > 0;
+  bool has_band = details && details->contains("covariance") && details->contains("g") &&
+                  m.sample_time_s > 0 && (*details)["g"].size() > 0;
+  std::string no_band = has_band ? "" : "method " + m.method + " stores no parameter covariance";
+  // arx-oe keeps the covariance of its first least-squares fit beside the refined g: the two do
+  // not belong together (propagated, they give a band 40x wider than the least-squares one on
+  // the demo's step record), so no band is drawn for it.
+  if (has_band && details->contains("warnings"))
+    for (const auto& w : (*details)["warnings"])
+      if (w.is_string() && w.get<std::string>().find("covariance is that of the first") != std::string::npos) {
+        has_band = false;
+        no_band = "the stored covariance is that of the least-squares fit before the output-error "
+                  "refinement, not of this model's parameters";
+      }
   double nyquist = ss.IsDiscrete() ? M_PI / ss.sample_time : INFINITY;
   if (has_band) nyquist = std::min(nyquist, M_PI / m.sample_time_s);
   hi = std::min(hi, nyquist);
@@ -269,6 +280,7 @@ json BodeJson(const ModelRecord& m) {
   json out = {{"model_id", m.model_id}, {"method", m.method}, {"omega", Std(omega)},
               {"mag_db", mag}, {"phase_deg", phase}, {"domain", ss.IsDiscrete() ? "discrete" : "continuous"},
               {"nyquist_rad_s", std::isfinite(nyquist) ? json(nyquist) : json(nullptr)}};
+  if (!has_band) out["no_band"] = no_band;
   if (has_band) {
     try {
       const auto& d = *details;
@@ -292,7 +304,6 @@ json BodeJson(const ModelRecord& m) {
         hi_ph.push_back(ph + shift + 2 * b.phase_std_rad(k) * 180.0 / M_PI);
       }
       std::string note = "±2σ of the discrete ARX least-squares estimate W(z) (first-order propagation of its covariance)";
-      if (m.method == "arx-oe") note += "; the covariance is that of the first least-squares fit, before the output-error refinement";
       out["band"] = {{"mag_db_center", mid_db}, {"mag_db_lo", lo_db}, {"mag_db_hi", hi_db},
                      {"phase_deg_lo", lo_ph}, {"phase_deg_hi", hi_ph}, {"note", note}};
     } catch (const std::exception& e) {

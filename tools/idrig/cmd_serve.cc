@@ -17,6 +17,7 @@
 
 #include "core/catalog/catalog.h"
 #include "core/io/gap_json.h"
+#include "core/io/gap_svg.h"
 #include "core/io/model_json.h"
 #include "tools/idrig/catalog_views.h"
 #include "tools/idrig/commands.h"
@@ -335,6 +336,18 @@ void Routes(httplib::Server& server, Desk& desk) {
       return json{{"report_id", d->report_id}, {"rig_id", d->rig_id}, {"model_id", d->model_id},
                   {"experiment_id", d->experiment_id}, {"created_utc", UtcTimeText(d->created_utime)},
                   {"text", GapReportText(report)}, {"report", report}};
+    });
+  });
+  // The where / which / how-far plots of a report: the CLI's SVGs (core/io/gap_svg.h), by name.
+  server.Get(R"(/api/gaps/(\d+)/plots)", [&](const httplib::Request& req, httplib::Response& res) {
+    Reply(res, [&] {
+      auto c = desk.OpenCatalog();
+      const int64_t id = IdFrom(req.matches[1], "report id");
+      auto d = c->Diagnosis(id);
+      if (!d) throw std::invalid_argument("no diagnosis report " + std::to_string(id) + " in " + desk.options().db);
+      json out = json::object();
+      for (const auto& [name, svg] : GapReportSvgs(json::parse(d->report_json))) out[name] = svg;
+      return out;
     });
   });
   // Read-only: whatever is not a GET is refused, naming why.
