@@ -27,7 +27,8 @@ ExciteService::ExciteService(Transport& transport, ExciteConfig config)
       config_(std::move(config)),
       reporter_(transport, "excite", "excite-" + config_.rig_id),
       command_channel_(Channel(config_.rig_id, ChannelKind::kCommand)),
-      status_channel_(Channel(config_.rig_id, ChannelKind::kExperimentStatus)),
+      status_(transport, Channel(config_.rig_id, ChannelKind::kExperimentStatus),
+              config_.status_period_s),
       // Starts at the start time in µs, so seq keeps increasing across restarts (the rig
       // refuses a seq that is not above the last one it accepted).
       command_seq_(NowMicros()) {
@@ -62,9 +63,7 @@ void ExciteService::Start(const experiment_request_t& request) {
   auto fail = [&](const std::string& message) {
     status.message = message;
     status.end_utime = NowMicros();
-    PublishStatus(status);
-    recent_.push_back(status);
-    if (recent_.size() > 8) recent_.pop_front();
+    status_.Finished(status);
   };
   if (active_)
     return fail("rig busy with experiment " + std::to_string(active_->status.experiment_id));
@@ -101,7 +100,7 @@ void ExciteService::Start(const experiment_request_t& request) {
         "; peak |u| " + std::to_string(accepted.peak_abs);
     a.status = status;
     active_ = std::move(a);
-    PublishStatus(active_->status);
+    status_.Publish(active_->status);
   } catch (const std::exception& e) {
     fail(std::string("refused: ") + e.what());
   }
@@ -136,9 +135,7 @@ void ExciteService::Finish(int32_t state, const std::string& message) {
   active_->status.state = state;
   active_->status.end_utime = NowMicros();
   if (!message.empty()) active_->status.message = message;
-  PublishStatus(active_->status);
-  recent_.push_back(active_->status);
-  if (recent_.size() > 8) recent_.pop_front();
+  status_.Finished(active_->status);
   active_.reset();
 }
 
@@ -168,20 +165,11 @@ void ExciteService::Tick() {
       Finish(experiment_status_t::STATE_DONE, "");
     }
   }
-  const int64_t now = NowMicros();
-  if (now - last_status_us_ >= static_cast<int64_t>(config_.status_period_s * 1e6)) {
-    last_status_us_ = now;
-    if (active_) PublishStatus(active_->status);
-    if (!recent_.empty()) PublishStatus(recent_.back());
+  if (status_.Due()) {
+    if (active_) status_.Publish(active_->status);
+    if (!status_.recent().empty()) status_.Publish(status_.recent().back());
   }
   if (reporter_.Due()) reporter_.Maybe(active_ ? "busy" : "running", Details().dump(), true);
-}
-
-void ExciteService::PublishStatus(const experiment_status_t& status) {
-  experiment_status_t s = status;
-  s.utime = NowMicros();
-  s.seq = status_seq_++;
-  transport_.PublishMessage(status_channel_, s);
 }
 
 nlohmann::json ExciteService::Details() const {
@@ -194,11 +182,7 @@ nlohmann::json ExciteService::Details() const {
                    {"samples_total", active_->status.samples_total},
                    {"signal_spec", active_->status.signal_spec}};
   }
-  nlohmann::json recent = nlohmann::json::array();
-  for (const auto& s : recent_)
-    recent.push_back(
-        {{"experiment_id", s.experiment_id}, {"state", s.state}, {"message", s.message}});
-  d["recent"] = recent;
+  d["recent"] = status_.RecentJson(false);
   return d;
 }
 

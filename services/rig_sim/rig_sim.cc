@@ -41,7 +41,8 @@ RigSim::RigSim(Transport& transport, RigSimConfig config)
       config_(std::move(config)),
       reporter_(transport, "rig_sim", "rig_sim-" + config_.rig_id),
       meas_channel_(Channel(config_.rig_id, ChannelKind::kMeasurement)),
-      status_channel_(Channel(config_.rig_id, ChannelKind::kExperimentStatus)),
+      status_(transport, Channel(config_.rig_id, ChannelKind::kExperimentStatus),
+              config_.status_period_s),
       rng_(config_.seed) {
   if (config_.keys.empty())
     throw std::invalid_argument("idrig-rig-sim needs an HMAC key (key_file)");
@@ -179,7 +180,7 @@ void RigSim::StartExperiment(const actuator_command_t& command) {
   e.status.start_utime = NowMicros();
   e.block_first = 0;
   experiment_ = std::move(e);
-  PublishStatus(experiment_->status);
+  status_.Publish(experiment_->status);
 }
 
 void RigSim::ApplySample(double u) {
@@ -248,9 +249,7 @@ void RigSim::End(int32_t state, const std::string& message) {
   e.status.end_utime = NowMicros();
   e.status.message = message;
   last_u_ = config_.safe_input;  // safe input after every experiment
-  PublishStatus(e.status);
-  recent_.push_back(e.status);
-  if (recent_.size() > 8) recent_.pop_front();
+  status_.Finished(e.status);
   ended_ids_[e.status.experiment_id] = true;
   experiment_.reset();
 }
@@ -262,19 +261,11 @@ void RigSim::Tick() {
     End(experiment_status_t::STATE_FAILED, "watchdog: no command for " +
                                                std::to_string(config_.watchdog_s) +
                                                " s; safe input applied");
-  if (now - last_status_us_ >= static_cast<int64_t>(config_.status_period_s * 1e6)) {
-    last_status_us_ = now;
-    if (experiment_) PublishStatus(experiment_->status);
-    for (const auto& s : recent_) PublishStatus(s);  // full snapshot of the recent ones
+  if (status_.Due()) {
+    if (experiment_) status_.Publish(experiment_->status);
+    for (const auto& s : status_.recent()) status_.Publish(s);  // full snapshot of the recent ones
   }
   if (reporter_.Due()) reporter_.Maybe(experiment_ ? "busy" : "running", Details().dump(), true);
-}
-
-void RigSim::PublishStatus(const experiment_status_t& status) {
-  experiment_status_t s = status;
-  s.utime = NowMicros();
-  s.seq = status_seq_++;
-  transport_.PublishMessage(status_channel_, s);
 }
 
 nlohmann::json RigSim::Details() const {
@@ -289,14 +280,7 @@ nlohmann::json RigSim::Details() const {
     d["experiment"] = {{"experiment_id", experiment_->status.experiment_id},
                        {"samples", experiment_->next_sample},
                        {"blocks", experiment_->block_seq}};
-  nlohmann::json recent = nlohmann::json::array();
-  for (const auto& s : recent_)
-    recent.push_back({{"experiment_id", s.experiment_id},
-                      {"state", s.state},
-                      {"samples", s.samples_total},
-                      {"blocks", s.blocks_total},
-                      {"message", s.message}});
-  d["recent"] = recent;
+  d["recent"] = status_.RecentJson(true);
   return d;
 }
 
