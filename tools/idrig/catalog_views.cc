@@ -364,7 +364,7 @@ json ExperimentsJson(Catalog* catalog, const std::string& store_path) {
           {"start_utime", e.start_utime}, {"end_utime", e.end_utime},
           {"start_utc", e.start_utime ? UtcTimeText(e.start_utime) : ""}};
   if (!store_path.empty() && Exists(store_path)) {
-    ExperimentStore store(store_path);
+    ExperimentStore store(store_path, true);
     for (const auto& e : store.Experiments()) {
       json& row = rows[{e.rig_id, e.experiment_id}];
       if (!row.contains("rig_id"))
@@ -390,7 +390,7 @@ IoRecord LoadExperimentRecord(const std::string& store_path, const std::string& 
   if (store_path.empty() || !Exists(store_path))
     throw std::invalid_argument("experiment store '" + store_path +
                                 "' does not exist (the logger's db_path, e.g. idrig-demo/experiments.db)");
-  ExperimentStore store(store_path);
+  ExperimentStore store(store_path, true);
   StoredExperiment e;
   if (!store.FindExperiment(rig, experiment_id, &e))
     throw std::invalid_argument("no experiment " + std::to_string(experiment_id) + " of rig '" + rig +
