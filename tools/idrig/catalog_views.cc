@@ -215,10 +215,20 @@ LinePlot HistoryPlot(const json& history) {
   if (ordinal) {
     plot.x = PlotAxis("models in storage order, labelled with the storage time (UTC)");
     const size_t every = std::max<size_t>(1, (rank.size() + 11) / 12);
+    // Models stored in the same second get milliseconds, so that no two ticks read the same.
+    bool same_second = false;
+    for (size_t i = 1; i < times.size(); ++i)
+      same_second |= std::floor(times[i]) == std::floor(times[i - 1]) && times[i] != times[i - 1];
     for (const auto& [t, i] : rank)
       if (i % every == 0) {
         const std::string utc = UtcText(t);
-        plot.x.ticks.push_back({static_cast<double>(i), (span > 43200 ? utc.substr(5, 11) + utc.substr(16) : utc.substr(11))});
+        std::string label = span > 43200 ? utc.substr(5, 11) + utc.substr(16) : utc.substr(11);
+        if (same_second) {
+          char ms[8];
+          std::snprintf(ms, sizeof(ms), ".%03d", static_cast<int>((t - std::floor(t)) * 1000));
+          label += ms;
+        }
+        plot.x.ticks.push_back({static_cast<double>(i), label});
       }
   } else {
     plot.x = PlotAxis("time stored", "", true);

@@ -194,7 +194,9 @@ async function historyView(query) {
   const ordinal = points.length > 1 && closest < span / 150;
   const x = ordinal ? points.map((p, i) => i) : points.map((p) => p.t);
   const series = h.series.map((s) => ({ label: s.method, points: true, y: points.map((p) => (s.points.some((q) => q.model_id === p.model_id) ? p.value : null)) }));
-  const labels = points.map((p) => (span > 43200 ? p.utc.slice(5) : p.utc.slice(11)));
+  const sameSecond = points.some((p, i) => i > 0 && Math.floor(p.t) === Math.floor(points[i - 1].t));
+  const ms = (p) => (sameSecond ? '.' + String(Math.floor((p.utime / 1000) % 1000)).padStart(3, '0') : '');
+  const labels = points.map((p) => (span > 43200 ? p.utc.slice(5) : p.utc.slice(11)) + ms(p));
   const div = el('div', { id: 'history' });
   view.append(div);
   linePlot(div, { kind: 'history', title: `${param} of rig ${rig}, one series per method`, width: 900, height: 360, x, time: !ordinal,
