@@ -35,6 +35,14 @@ std::string Format(double v, int precision = 4) {
   return s.str();
 }
 
+// Long category labels are cut (the whole label stays in the bar's tooltip).
+std::string Shorten(const std::string& text, size_t max_chars) {
+  size_t chars = 0, i = 0;
+  for (; i < text.size(); ++i)
+    if ((static_cast<unsigned char>(text[i]) & 0xC0) != 0x80 && ++chars > max_chars) break;
+  return i < text.size() ? text.substr(0, i) + "…" : text;
+}
+
 std::string AxisTitle(const PlotAxis& a) {
   return a.unit.empty() ? a.label : a.label + " [" + a.unit + "]";
 }
@@ -275,7 +283,7 @@ std::string BarChartSvg(const BarChart& chart) {
       << "\" height=\"" << h << "\" fill=\"" << Colour(b.group) << "\"><title>" << Escape(b.label)
       << ": " << Format(b.value, 4) << "</title></rect>\n"
       << "<text class=\"tick\" transform=\"translate(" << x + slot * 0.35 << "," << top + plot_h + 10
-      << ") rotate(40)\">" << Escape(b.label) << "</text>\n";
+      << ") rotate(40)\">" << Escape(Shorten(b.label, 26)) << "</text>\n";
   }
   if (chart.has_reference) {
     const double y = sy(chart.reference);

@@ -20,7 +20,7 @@ function check(ok, what) {
 
 const profile = mkdtempSync(join(tmpdir(), 'idrig-chromium-'));
 const context = await chromium.launchPersistentContext(profile, {
-  executablePath: '/usr/bin/chromium', headless: true, viewport: { width: 1280, height: 1000 },
+  executablePath: '/usr/bin/chromium', headless: true, viewport: { width: 1280, height: 800 },
   args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run', '--disable-background-networking',
     '--disable-component-update', '--disable-sync'],
 });
@@ -63,7 +63,8 @@ try {
   const pz = await points('.plot[data-kind="scatter"]');
   check(pz >= 3, `pole-zero map has ${pz} marks`);
   check(await points('.plot[data-kind="step"]') > 50, 'step response drawn');
-  await page.screenshot({ path: join(shots, 'dashboard_bode.png'), fullPage: true });
+  await page.locator('#bode').screenshot({ path: join(shots, 'dashboard_bode.png') });
+  await page.locator('.plot[data-kind="step"]').locator('..').screenshot({ path: join(shots, 'dashboard_step_poles.png') });
 
   await open('history?rig=sim1&param=wn_1&method=');
   const h = await points('#history .plot');
@@ -73,7 +74,7 @@ try {
   check(legend === methods + 1, `history legend: ${legend - 1} series, one per method (${methods})`);
   const hp = await painted('#history');
   check(hp > 500, `history plot painted (${hp} pixels)`);
-  await page.screenshot({ path: join(shots, 'dashboard_history.png') });
+  await page.locator('#history').screenshot({ path: join(shots, 'dashboard_history.png') });
 
   await open('gaps/1');
   const gap = await page.$$eval('#gap-plots .svg-plot', (d) => d.map((x) => [x.dataset.name, Number(x.dataset.points)]));
@@ -81,7 +82,7 @@ try {
   check(gap.every(([, n]) => n > 0), `every gap plot has bars: ${gap.map((g) => g[1]).join(', ')}`);
   const verdict = await page.$eval('pre', (p) => p.textContent);
   check(/verdict: parameter_mismatch/.test(verdict), 'gap report text names the verdict');
-  await page.screenshot({ path: join(shots, 'dashboard_gap.png'), fullPage: true });
+  await page.locator('#gap-plots').screenshot({ path: join(shots, 'dashboard_gap.png') });
 
   check(errors.length === 0, `no errors in the page${errors.length ? ': ' + errors.join('; ') : ''}`);
 } finally {

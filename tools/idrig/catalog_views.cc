@@ -207,9 +207,9 @@ LinePlot HistoryPlot(const json& history) {
   const double span = times.back() - times.front();
   double closest = span;
   for (size_t i = 1; i < times.size(); ++i) closest = std::min(closest, times[i] - times[i - 1]);
-  // On a ~650 px time axis, points closer than 1/150 of the span (4 px) overlap: then the axis
-  // is the storage order, each tick labelled with its storage time.
-  const bool ordinal = times.size() > 1 && closest < span / 150.0;
+  // On a ~650 px time axis, points closer than 1/100 of the span (6.5 px) overlap: then the
+  // axis is the storage order, each tick labelled with its storage time.
+  const bool ordinal = times.size() > 1 && closest < span / 100.0;
   std::map<double, int> rank;
   for (double t : times) rank.emplace(t, static_cast<int>(rank.size()));
   if (ordinal) {

@@ -75,6 +75,10 @@ void RegisterExperimentCommands(CLI::App& app) {
           return;
         }
         if (i == 0 && !ex) std::cerr << "waiting for idrig-excite on rig " << args->rig << "…\n";
+        if (i % 25 == 24 && rs)  // progress every 5 s
+          std::cerr << "  experiment " << id << ": " << rs->samples_done << "/" << rs->samples_total
+                    << " samples (" << (rs->samples_total ? 100 * rs->samples_done / rs->samples_total : 0)
+                    << " %)\n";
       }
     });
     status->callback([args] {

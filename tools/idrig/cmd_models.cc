@@ -247,6 +247,9 @@ void RegisterModelsCommands(CLI::App& app) {
         }
         if (i % 20 == 19)
           client.RequestIdentify(args->rig, id, args->experiment, args->method, args->options);
+        if (i % 50 == 49)  // progress every 5 s
+          std::cerr << "  waiting for the catalogue's acknowledgement of request " << id << " ("
+                    << (i + 1) / 10 << " s of 60)\n";
       }
       if (args->wait) throw std::runtime_error("no acknowledgement within 60 s");
     });

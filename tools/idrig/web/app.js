@@ -186,12 +186,12 @@ async function historyView(query) {
   if (!rig) { view.append(el('p', { class: 'muted' }, 'no rig in the catalogue yet')); return; }
   const h = await api(`history?rig=${encodeURIComponent(rig)}&param=${encodeURIComponent(param)}&method=${encodeURIComponent(method)}`);
   if (!h.count) { view.append(el('p', { class: 'muted' }, `no model of rig ${rig} has ${param}`)); return; }
-  // One x per model. Models stored close together (closer than 1/150 of the span) would overlap on
+  // One x per model. Models stored close together (closer than 1/100 of the span) would overlap on
   // a time axis: then x is the storage order, each tick labelled with the storage time.
   const points = h.series.flatMap((s) => s.points).sort((a, b) => a.t - b.t);
   const span = points[points.length - 1].t - points[0].t;
   const closest = Math.min(...points.slice(1).map((p, i) => p.t - points[i].t));
-  const ordinal = points.length > 1 && closest < span / 150;
+  const ordinal = points.length > 1 && closest < span / 100;
   const x = ordinal ? points.map((p, i) => i) : points.map((p) => p.t);
   const series = h.series.map((s) => ({ label: s.method, points: true, y: points.map((p) => (s.points.some((q) => q.model_id === p.model_id) ? p.value : null)) }));
   const sameSecond = points.some((p, i) => i > 0 && Math.floor(p.t) === Math.floor(points[i - 1].t));
@@ -201,7 +201,7 @@ async function historyView(query) {
   view.append(div);
   linePlot(div, { kind: 'history', title: `${param} of rig ${rig}, one series per method`, width: 900, height: 360, x, time: !ordinal,
     xLabel: ordinal ? 'models in storage order, labelled with the storage time (UTC)' : 'time stored (UTC)', yLabel: `${param} [${h.unit}]`,
-    xValues: ordinal ? orderAxis(labels) : undefined, xSplits: ordinal ? () => x : undefined, series,
+    xValues: ordinal ? orderAxis(labels) : undefined, xSplits: ordinal ? () => x : undefined, xRange: ordinal ? [-0.5, x.length - 0.5] : undefined, series,
     note: `${h.count} models from ${points[0].utc} to ${points[points.length - 1].utc} UTC` });
   view.append(table(points, [['model', (p) => String(p.model_id), 'num'], ['method', (p) => h.series.find((s) => s.points.some((q) => q.model_id === p.model_id)).method],
     ['stored (UTC)', (p) => p.utc], [`${param} [${h.unit}]`, (p) => num(p.value, 6), 'num']]));
@@ -219,7 +219,10 @@ async function gapsView(id) {
   view.append(el('h3', {}, `report ${id}: where, which, how far`), el('pre', {}, g.text));
   const row = el('div', { class: 'row', id: 'gap-plots' });
   view.append(row);
-  for (const [name, svg] of Object.entries(svgs)) {
+  // where (frequency, amplitude, state, time), then which and how far (the ranking)
+  const order = ['gap_frequency.svg', 'gap_amplitude.svg', 'gap_state.svg', 'gap_time.svg', 'gap_ranking.svg'];
+  const names = Object.keys(svgs).sort((a, b) => (order.indexOf(a) + 99 * (order.indexOf(a) < 0)) - (order.indexOf(b) + 99 * (order.indexOf(b) < 0)));
+  for (const [name, svg] of names.map((n) => [n, svgs[n]])) {
     const d = el('div', { class: 'plot svg-plot', 'data-name': name });
     d.innerHTML = svg;
     d.dataset.points = String(d.querySelectorAll('rect.bar').length);

@@ -30,7 +30,7 @@ function box(parent, title, note) {
 }
 
 // opts: {title, note, x: [...], xLabel, yLabel, series: [{label, y, colour, dash, points, width}],
-//        logX, time, xValues (axis tick formatter), bands: [[hiIndex, loIndex, fill]], width, height}
+//        logX, time, xValues (axis tick formatter), xRange [min, max], bands: [[hiIndex, loIndex, fill]], width, height}
 export function linePlot(parent, opts) {
   const div = box(parent, opts.title, opts.note);
   div.classList.add('uplot-box');
@@ -51,7 +51,7 @@ export function linePlot(parent, opts) {
   if (opts.xSplits) axes[0].splits = opts.xSplits;
   const u = new uPlot({
     width: opts.width || 760, height: opts.height || 300,
-    scales: { x: opts.logX ? { time: false, distr: 3, log: 10 } : { time: !!opts.time } },
+    scales: { x: opts.logX ? { time: false, distr: 3, log: 10 } : { time: !!opts.time, ...(opts.xRange ? { range: opts.xRange } : {}) } },
     series, axes,
     bands: (opts.bands || []).map(([a, b, fill]) => ({ series: [a, b], fill })),
     legend: { show: true },
