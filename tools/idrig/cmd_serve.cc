@@ -151,6 +151,8 @@ class Desk {
 
   const ServeOptions& options() const { return options_; }
 
+  DiagnosisRecord RequireDiagnosis(const std::string& id_text) const;
+
  private:
   ServeOptions options_;
   std::unique_ptr<LiveBus> bus_;
@@ -182,6 +184,13 @@ void Reply(httplib::Response& res, const std::function<json()>& f) {
     res.status = 500;
     res.set_content(json({{"error", e.what()}}).dump(), "application/json");
   }
+}
+
+DiagnosisRecord Desk::RequireDiagnosis(const std::string& id_text) const {
+  const int64_t id = IdFrom(id_text, "report id");
+  auto d = OpenCatalog()->Diagnosis(id);
+  if (!d) throw std::invalid_argument("no diagnosis report " + std::to_string(id) + " in " + options_.db);
+  return *d;
 }
 
 void Routes(httplib::Server& server, Desk& desk) {
@@ -328,25 +337,19 @@ void Routes(httplib::Server& server, Desk& desk) {
   });
   server.Get(R"(/api/gaps/(\d+))", [&](const httplib::Request& req, httplib::Response& res) {
     Reply(res, [&] {
-      auto c = desk.OpenCatalog();
-      const int64_t id = IdFrom(req.matches[1], "report id");
-      auto d = c->Diagnosis(id);
-      if (!d) throw std::invalid_argument("no diagnosis report " + std::to_string(id) + " in " + desk.options().db);
-      const json report = json::parse(d->report_json);
-      return json{{"report_id", d->report_id}, {"rig_id", d->rig_id}, {"model_id", d->model_id},
-                  {"experiment_id", d->experiment_id}, {"created_utc", UtcTimeText(d->created_utime)},
+      const DiagnosisRecord d = desk.RequireDiagnosis(req.matches[1]);
+      const json report = json::parse(d.report_json);
+      return json{{"report_id", d.report_id}, {"rig_id", d.rig_id}, {"model_id", d.model_id},
+                  {"experiment_id", d.experiment_id}, {"created_utc", UtcTimeText(d.created_utime)},
                   {"text", GapReportText(report)}, {"report", report}};
     });
   });
   // The where / which / how-far plots of a report: the CLI's SVGs (core/io/gap_svg.h), by name.
   server.Get(R"(/api/gaps/(\d+)/plots)", [&](const httplib::Request& req, httplib::Response& res) {
     Reply(res, [&] {
-      auto c = desk.OpenCatalog();
-      const int64_t id = IdFrom(req.matches[1], "report id");
-      auto d = c->Diagnosis(id);
-      if (!d) throw std::invalid_argument("no diagnosis report " + std::to_string(id) + " in " + desk.options().db);
+      const DiagnosisRecord d = desk.RequireDiagnosis(req.matches[1]);
       json out = json::object();
-      for (const auto& [name, svg] : GapReportSvgs(json::parse(d->report_json))) out[name] = svg;
+      for (const auto& [name, svg] : GapReportSvgs(json::parse(d.report_json))) out[name] = svg;
       return out;
     });
   });
