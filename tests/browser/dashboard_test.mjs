@@ -52,6 +52,16 @@ try {
     check(rows.some((r) => r[1] === e.id && r[5] === e.method), `models table lists model ${e.id} (${e.method})`);
   await page.screenshot({ path: join(shots, 'dashboard_models.png') });
 
+  if (expected.length >= 2) {
+    await open(`models?compare=${expected[0].id},${expected[1].id}`);
+    const cmp = await page.$$eval('#compare-table tr', (trs) => trs.slice(1).map((tr) => [...tr.children].map((td) => td.textContent)));
+    check(cmp.some((r) => r[0] === 'method' && r[1] === expected[0].method && r[2] === expected[1].method),
+      `compare ${expected[0].id} and ${expected[1].id}: methods side by side`);
+    check(cmp.filter((r) => /%\)$/.test(r[3])).length >= 3, 'compare has differences with relative values');
+    check(await points('#bode .plot[data-kind="bode-magnitude"]') > 100, 'compare draws both Bode plots');
+    await page.locator('#compare-table').screenshot({ path: join(shots, 'dashboard_compare.png') });
+  }
+
   const band = expected.find((e) => e.method === 'arx') || expected[0];  // arx stores Cov(g)
   await open(`models/${band.id}`);
   const mag = await points('#bode .plot[data-kind="bode-magnitude"]'), phase = await points('#bode .plot[data-kind="bode-phase"]');

@@ -23,6 +23,7 @@ function el(tag, attrs = {}, ...children) {
   return e;
 }
 
+const short = (text, n = 34) => (text && text.length > n ? el('span', { title: text }, text.slice(0, n - 1) + '…') : text || '');
 const num = (v, p = 4) => (v === null || v === undefined || !Number.isFinite(v) ? '-' : String(+v.toPrecision(p)));
 const poles = (list) => list.map(([re, im]) => (Math.abs(im) < 1e-9 ? num(re) : `${num(re)}${im < 0 ? '−' : '+'}${num(Math.abs(im))}j`)).join(', ');
 
@@ -76,7 +77,7 @@ async function rigsView() {
 async function experimentsView(rig, id) {
   const list = await api('experiments');
   view.append(el('h2', {}, 'Experiments'),
-    table(list, [['rig', (e) => e.rig_id], ['experiment', (e) => String(e.experiment_id)], ['signal', (e) => e.signal_spec], ['fs [Hz]', (e) => num(e.sample_rate_hz), 'num'],
+    table(list, [['rig', (e) => e.rig_id], ['experiment', (e) => String(e.experiment_id)], ['signal', (e) => short(e.signal_spec, 48)], ['fs [Hz]', (e) => num(e.sample_rate_hz), 'num'],
       ['samples', (e) => e.samples_total, 'num'], ['state', (e) => e.state], ['started (UTC)', (e) => e.start_utc ?? '-'],
       ['blocks stored', (e) => (e.in_store ? `${e.blocks_stored}/${e.blocks_total}${e.missing_blocks ? `, ${e.missing_blocks} missing` : ''}` : 'not in the store')]],
     { id: 'experiments-table', onclick: (e) => { location.hash = `experiments/${e.rig_id}/${e.experiment_id}`; }, selected: (e) => String(e.experiment_id) === id }));
@@ -164,7 +165,7 @@ async function modelsView(id, query) {
     ['compare', (m) => { const c = el('input', { type: 'checkbox' }); c.checked = picked.has(String(m.model_id));
       c.addEventListener('click', (ev) => { ev.stopPropagation(); c.checked ? picked.add(String(m.model_id)) : picked.delete(String(m.model_id));
         if (picked.size === 2) location.hash = `models?compare=${[...picked].join(',')}`; }); return c; }],
-    ['id', (m) => String(m.model_id), 'num'], ['rig', (m) => m.rig_id], ['experiment', (m) => String(m.experiment_id)], ['signal', (m) => m.signal_spec],
+    ['id', (m) => String(m.model_id), 'num'], ['rig', (m) => m.rig_id], ['experiment', (m) => String(m.experiment_id)], ['signal', (m) => short(m.signal_spec)],
     ['method', (m) => m.method], ['fit %', (m) => num(m.record_fit_percent ?? m.fit_percent), 'num'], ['order', (m) => num(m.order), 'num'],
     ['DC gain', (m) => num(m.dc_gain), 'num'], ['poles [rad/s]', (m) => poles(m.poles)], ['worker', (m) => m.worker_id], ['stored (UTC)', (m) => m.created_utc]];
   view.append(table(list, columns, { id: 'models-table', onclick: (m) => { location.hash = `models/${m.model_id}`; }, selected: (m) => String(m.model_id) === id }));
