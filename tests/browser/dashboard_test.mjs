@@ -62,6 +62,15 @@ try {
     await page.locator('#compare-table').screenshot({ path: join(shots, 'dashboard_compare.png') });
   }
 
+  await open('experiments');
+  const experiments = await page.$$eval('#experiments-table tr', (trs) => trs.slice(1).map((tr) => [...tr.children].map((td) => td.textContent)));
+  check(experiments.length === 3 && experiments.every((r) => /^\d+\/\d+$/.test(r[7])), `experiments table: ${experiments.length} experiments, blocks stored`);
+  await open(`experiments/sim1/${experiments[0][1]}`);
+  const signalPoints = await page.$$eval('.uplot-box', (d) => d.map((x) => Number(x.dataset.points)));
+  check(signalPoints.length === 2 && signalPoints.every((n) => n === Number(experiments[0][4])), `experiment signals u and y plotted: ${signalPoints.join(', ')} points`);
+  const links = await page.$$eval('a[download]', (a) => a.map((x) => x.getAttribute('href')));
+  check(links.some((h) => h.endsWith('.csv')) && links.some((h) => h.endsWith('.mat')), 'CSV and .mat export links');
+
   const band = expected.find((e) => e.method === 'arx') || expected[0];  // arx stores Cov(g)
   await open(`models/${band.id}`);
   const mag = await points('#bode .plot[data-kind="bode-magnitude"]'), phase = await points('#bode .plot[data-kind="bode-phase"]');
