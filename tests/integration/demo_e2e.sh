@@ -85,6 +85,9 @@ expect2 "must end in .csv or .mat" "$idrig" experiment export "$ms" --experiment
 expect2 "variable 'speed' not found" "$idrig" identify --data "$dir/ms.mat" --u u --y speed
 expect2 "name the input and output variables" "$idrig" identify --data "$dir/ms.mat"
 expect2 "no model 99" "$idrig" models compare 1 99 --db "$db"
+expect2 "has metric 'wn_9'" "$idrig" models history --db "$db" --rig sim1 --param wn_9 --svg "$dir/x.svg"
+expect2 "does not exist" "$idrig" serve --db "$dir/none.db"
+expect2 "has no index.html" "$idrig" serve --db "$db" --web-dir "$dir"
 # The dashboard's API: read-only, on 127.0.0.1, JSON errors.
 "$idrig" serve --db "$db" --experiments "$dir/demo/experiments.db" --port 0 > "$dir/serve.txt" 2>&1 &
 server=$!
