@@ -15,7 +15,14 @@ PACKAGES=(
   iproute2 util-linux
   # JSON checks in the command-line tests
   jq
+  # the dashboard (idrig serve): HTTP server; MATLAB .mat files; the browser test's Chromium
+  libcpp-httplib-dev libmatio-dev chromium chromium-driver curl
 )
+# The dashboard's front end is built with npm (deploy/build-web.sh): Debian's nodejs and npm
+# unless a node with npm is already installed.
+if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
+  PACKAGES+=(nodejs npm)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -1,5 +1,7 @@
 #include "core/catalog/experiment_store.h"
 
+#include <stdexcept>
+
 namespace idrig {
 
 const std::vector<std::string>& ExperimentStore::Migrations() {
@@ -45,11 +47,17 @@ SqliteDatabase& Prepared(SqliteDatabase& db) {
   db.Migrate(ExperimentStore::Migrations());
   return db;
 }
+// A read-only store is used as it is (no pragma, no migration): it must have the schema.
+SqliteDatabase& Checked(SqliteDatabase& db) {
+  if (db.UserVersion() < 1)
+    throw std::runtime_error("'" + db.path() + "' is not an idrig experiment store (no schema)");
+  return db;
+}
 }  // namespace
 
-ExperimentStore::ExperimentStore(const std::string& path)
-    : db_(path),
-      insert_block_(Prepared(db_),
+ExperimentStore::ExperimentStore(const std::string& path, bool read_only)
+    : db_(path, read_only),
+      insert_block_(read_only ? Checked(db_) : Prepared(db_),
                     "INSERT OR IGNORE INTO blocks(rig_id, experiment_id, seq, first_sample, "
                     "n_samples, utime, recv_utime, data) VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)"),
       insert_command_(

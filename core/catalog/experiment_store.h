@@ -29,7 +29,8 @@ struct StoredExperiment {
 
 class ExperimentStore {
  public:
-  explicit ExperimentStore(const std::string& path);
+  // read_only: opens an existing store without writing to it (the dashboard, experiment export).
+  explicit ExperimentStore(const std::string& path, bool read_only = false);
   static const std::vector<std::string>& Migrations();
 
   void Begin();  // batch writes in one transaction (as rosbag2 does)

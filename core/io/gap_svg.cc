@@ -8,25 +8,10 @@
 #include <stdexcept>
 #include <vector>
 
+#include "core/io/svg_plot.h"
+
 namespace idrig {
 namespace {
-
-struct Bar {
-  std::string label;
-  double value = 0;
-  bool highlight = false;
-};
-
-std::string Escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else if (c == '&') out += "&amp;";
-    else out += c;
-  }
-  return out;
-}
 
 std::string Format(double v) {
   std::ostringstream s;
@@ -35,60 +20,26 @@ std::string Format(double v) {
   return s.str();
 }
 
-// A vertical bar chart; an optional horizontal reference line (e.g. the noise floor).
-std::string BarChart(const std::string& title, const std::string& y_label, const std::vector<Bar>& bars,
-                     double reference = NAN, const std::string& reference_label = "") {
-  const int width = 760, height = 420, left = 70, right = 20, top = 40, bottom = 120;
-  const int plot_w = width - left - right, plot_h = height - top - bottom;
-  double top_value = std::isfinite(reference) ? reference : 0.0;
-  for (const auto& b : bars) top_value = std::max(top_value, b.value);
-  if (!(top_value > 0)) top_value = 1;
-  top_value *= 1.1;
-  std::ostringstream s;
-  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
-    << "\" font-family=\"sans-serif\" font-size=\"11\">\n"
-    << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
-    << "<text x=\"" << width / 2 << "\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">" << Escape(title)
-    << "</text>\n"
-    << "<text transform=\"translate(16," << top + plot_h / 2 << ") rotate(-90)\" text-anchor=\"middle\">"
-    << Escape(y_label) << "</text>\n"
-    << "<line x1=\"" << left << "\" y1=\"" << top + plot_h << "\" x2=\"" << left + plot_w << "\" y2=\""
-    << top + plot_h << "\" stroke=\"black\"/>\n"
-    << "<line x1=\"" << left << "\" y1=\"" << top << "\" x2=\"" << left << "\" y2=\"" << top + plot_h
-    << "\" stroke=\"black\"/>\n";
-  for (int i = 0; i <= 4; ++i) {
-    const double v = top_value * i / 4;
-    const double y = top + plot_h - plot_h * i / 4.0;
-    s << "<text x=\"" << left - 6 << "\" y=\"" << y + 4 << "\" text-anchor=\"end\">" << Format(v) << "</text>\n"
-      << "<line x1=\"" << left << "\" y1=\"" << y << "\" x2=\"" << left + plot_w << "\" y2=\"" << y
-      << "\" stroke=\"#ddd\"/>\n";
-  }
-  const double slot = bars.empty() ? plot_w : static_cast<double>(plot_w) / bars.size();
-  for (size_t i = 0; i < bars.size(); ++i) {
-    const double h = plot_h * std::max(0.0, bars[i].value) / top_value;
-    const double x = left + slot * i + slot * 0.15;
-    s << "<rect x=\"" << x << "\" y=\"" << top + plot_h - h << "\" width=\"" << slot * 0.7 << "\" height=\"" << h
-      << "\" fill=\"" << (bars[i].highlight ? "#c0392b" : "#5d8aa8") << "\"><title>" << Escape(bars[i].label)
-      << ": " << Format(bars[i].value) << "</title></rect>\n"
-      << "<text transform=\"translate(" << x + slot * 0.35 << "," << top + plot_h + 8
-      << ") rotate(40)\" text-anchor=\"start\">" << Escape(bars[i].label) << "</text>\n";
-  }
-  if (std::isfinite(reference)) {
-    const double y = top + plot_h - plot_h * reference / top_value;
-    s << "<line x1=\"" << left << "\" y1=\"" << y << "\" x2=\"" << left + plot_w << "\" y2=\"" << y
-      << "\" stroke=\"#27ae60\" stroke-dasharray=\"6,4\"/>\n"
-      << "<text x=\"" << left + plot_w - 4 << "\" y=\"" << y - 4 << "\" text-anchor=\"end\" fill=\"#27ae60\">"
-      << Escape(reference_label) << "</text>\n";
-  }
-  s << "</svg>\n";
-  return s.str();
+std::vector<BarItem> FactorBars(const nlohmann::json& factor) {
+  std::vector<BarItem> bars;
+  for (const auto& b : factor.at("bins"))
+    bars.push_back({b.at("label").get<std::string>(), b.at("relative_rms").get<double>(), 0});
+  return bars;
 }
 
-std::vector<Bar> FactorBars(const nlohmann::json& factor, const std::string& prefix = "") {
-  std::vector<Bar> bars;
-  for (const auto& b : factor.at("bins"))
-    bars.push_back({prefix + b.at("label").get<std::string>(), b.at("relative_rms").get<double>(), false});
-  return bars;
+// A bar chart of the gap (relative RMS of the residual y − ŷ0 per bin) against the noise floor.
+std::string FactorChart(const std::string& title, const std::string& x_label,
+                        std::vector<BarItem> bars, double floor) {
+  BarChart c;
+  c.title = title;
+  c.x_label = x_label;
+  c.y = {"relative RMS of y − ŷ0 (residual / simulated output)", "1"};
+  c.bars = std::move(bars);
+  c.groups = {"gap in this bin"};
+  c.has_reference = true;
+  c.reference = floor;
+  c.reference_label = "noise floor (NRMSE)";
+  return BarChartSvg(c);
 }
 
 }  // namespace
@@ -96,38 +47,45 @@ std::vector<Bar> FactorBars(const nlohmann::json& factor, const std::string& pre
 std::map<std::string, std::string> GapReportSvgs(const nlohmann::json& report) {
   std::map<std::string, std::string> out;
   const auto& where = report.at("where");
-  std::vector<Bar> bands;
+  BarChart bands;
+  bands.title = "Where: gap by frequency band, |model error / G0| on excited lines";
+  bands.x_label = "frequency band [Hz]";
+  bands.y = {"median |Ê/G0|", "1"};
+  bands.groups = {"within the noise", "significant against the noise"};
   for (const auto& b : where.at("bands"))
-    bands.push_back({Format(b.at("f_lo_hz").get<double>()) + "–" + Format(b.at("f_hi_hz").get<double>()) + " Hz",
-                     b.at("relative_error").get<double>(), b.at("significant").get<bool>()});
-  out["gap_frequency.svg"] = BarChart(
-      "Gap by frequency: |model error / G0| (red: significant against the noise)",
-      "median |Ê/G0| on excited lines", bands);
+    bands.bars.push_back({Format(b.at("f_lo_hz").get<double>()) + "–" +
+                              Format(b.at("f_hi_hz").get<double>()) + " Hz",
+                          b.at("relative_error").get<double>(), b.at("significant").get<bool>() ? 1 : 0});
+  out["gap_frequency.svg"] = BarChartSvg(bands);
   const auto& factors = where.at("factors");
   const double floor = where.at("noise_nrmse").get<double>();
   if (factors.contains("amplitude"))
-    out["gap_amplitude.svg"] = BarChart("Gap by input amplitude (residual RMS / simulated output RMS)",
-                                        "relative RMS of y − ŷ0", FactorBars(factors["amplitude"]), floor,
-                                        "noise floor (NRMSE)");
-  std::vector<Bar> state;
+    out["gap_amplitude.svg"] = FactorChart("Where: gap by input amplitude", "input amplitude bin",
+                                           FactorBars(factors["amplitude"]), floor);
+  std::vector<BarItem> state;
   for (const char* name : {"velocity_sign", "reversal", "output_level"})
     if (factors.contains(name)) {
       auto bars = FactorBars(factors[name]);
       state.insert(state.end(), bars.begin(), bars.end());
     }
-  out["gap_state.svg"] = BarChart("Gap by state: velocity sign, reversals, output level",
-                                  "relative RMS of y − ŷ0", state, floor, "noise floor (NRMSE)");
+  out["gap_state.svg"] = FactorChart("Where: gap by state (velocity sign, reversals, output level)",
+                                     "state bin", state, floor);
   if (factors.contains("time"))
-    out["gap_time.svg"] = BarChart("Gap over time (record quarters)", "relative RMS of y − ŷ0",
-                                   FactorBars(factors["time"]), floor, "noise floor (NRMSE)");
-  std::vector<Bar> ranking;
+    out["gap_time.svg"] = FactorChart("Where: gap over time", "record quarter",
+                                      FactorBars(factors["time"]), floor);
+  BarChart ranking;
+  ranking.title = "Which, and how far: validation NRMSE with each candidate effect added";
+  ranking.x_label = "candidate effect";
+  ranking.y = {"simulation NRMSE on validation data", "1"};
+  ranking.groups = {"candidate", "the verdict"};
   const std::string verdict = report.at("verdict").at("effect_fitted").get<std::string>();
   for (const auto& c : report.at("ranking"))
-    ranking.push_back({c.at("effect").get<std::string>(), c.at("nrmse_after").get<double>(),
-                       c.at("effect").get<std::string>() == verdict});
-  out["gap_ranking.svg"] = BarChart("Validation NRMSE with each candidate effect (red: the verdict)",
-                                    "simulation NRMSE on validation data", ranking,
-                                    report.at("verdict").at("nrmse_before").get<double>(), "G0 as given");
+    ranking.bars.push_back({c.at("effect").get<std::string>(), c.at("nrmse_after").get<double>(),
+                            c.at("effect").get<std::string>() == verdict ? 1 : 0});
+  ranking.has_reference = true;
+  ranking.reference = report.at("verdict").at("nrmse_before").get<double>();
+  ranking.reference_label = "G0 as given";
+  out["gap_ranking.svg"] = BarChartSvg(ranking);
   return out;
 }
 

@@ -274,6 +274,7 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
     PrintModel(catalog, *m, false);
     std::cout << "\n";
   }
+  const std::string self = CommandPathFromHere();  // the running binary, as typed from here
   std::cout
       << "true plant: W = (0.5 s + 1) / (s^3 + 2.5 s^2 + 4 s + 1.5), poles -0.5, -1+-1.414j\n\n";
   for (const auto& d : catalog.Diagnoses(rig, 1)) {
@@ -282,18 +283,23 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
     std::istringstream text(GapReportText(nlohmann::json::parse(d.report_json)));
     std::string line;
     for (int i = 0; i < 4 && std::getline(text, line); ++i) std::cout << "  " << line << "\n";
-    std::cout << "  (whole report and plots: build/bin/idrig gap report " << d.report_id << " --db "
+    std::cout << "  (whole report and plots: " << self << " gap report " << d.report_id << " --db "
               << dir << "/catalog.db --plots " << dir << "/gap)\n\n";
   }
   std::cout << "all models of rig " << rig << " (every demo run adds to the history):\n";
   PrintModelTable(catalog, catalog.Models(rig));
   std::cout << "\n";
   PrintHistory(catalog, rig, "wn_1", "");
-  std::cout << "\nnext: build/bin/idrig models list --db " << dir << "/catalog.db\n"
-            << "      build/bin/idrig models history --db " << dir << "/catalog.db --rig " << rig
-            << " --param wn_2\n"
+  std::cout << "\nnext: " << self << " models list --db " << dir << "/catalog.db\n"
+            << "      " << self << " models history --db " << dir << "/catalog.db --rig " << rig
+            << " --param wn_2 --svg " << dir << "/wn_2.svg\n"
+            << "      " << self << " experiment list --db " << dir << "/catalog.db --experiments "
+            << dir << "/experiments.db\n"
             << "      sqlite3 " << dir
-            << "/catalog.db 'SELECT model_id, method, data_hash FROM models'\n";
+            << "/catalog.db 'SELECT model_id, method, data_hash FROM models'\n"
+            << "\nthe dashboard (models, Bode, history, gap plots; read-only, on this machine only):\n"
+            << "      " << self << " serve --db " << dir << "/catalog.db --experiments " << dir
+            << "/experiments.db   # then open http://127.0.0.1:8765/\n";
 }
 
 }  // namespace

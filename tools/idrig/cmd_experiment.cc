@@ -1,9 +1,14 @@
-// `idrig experiment start|status|stop`: experiments on a rig through idrig-excite.
+// `idrig experiment start|status|stop`: experiments on a rig through idrig-excite;
+// `idrig experiment list|export`: recorded experiments from the catalogue and the logger's store.
+#include <unistd.h>
+
+#include <iomanip>
 #include <iostream>
 #include <memory>
 
 #include "core/transport/channels.h"
 #include "core/transport/signing.h"
+#include "tools/idrig/catalog_views.h"
 #include "tools/idrig/commands.h"
 #include "tools/idrig/service_client.h"
 
@@ -70,6 +75,10 @@ void RegisterExperimentCommands(CLI::App& app) {
           return;
         }
         if (i == 0 && !ex) std::cerr << "waiting for idrig-excite on rig " << args->rig << "…\n";
+        if (i % 25 == 24 && rs)  // progress every 5 s
+          std::cerr << "  experiment " << id << ": " << rs->samples_done << "/" << rs->samples_total
+                    << " samples (" << (rs->samples_total ? 100 * rs->samples_done / rs->samples_total : 0)
+                    << " %)\n";
       }
     });
     status->callback([args] {
@@ -90,6 +99,52 @@ void RegisterExperimentCommands(CLI::App& app) {
       if (!shown)
         std::cout << "no experiment status heard on rig " << args->rig << " within "
                   << args->seconds << " s\n";
+    });
+    // ---- experiment list|export: what the catalogue and the logger's store hold (read-only).
+    struct StoreArgs {
+      std::string db = "idrig-demo/catalog.db", store = "idrig-demo/experiments.db", rig = "sim1", out;
+      int64_t id = 0;
+    };
+    auto store_args = std::make_shared<StoreArgs>();
+    auto* list = group->add_subcommand("list", "experiments in the catalogue and the experiment store");
+    auto* export_cmd = group->add_subcommand("export", "write a recorded experiment as CSV (t,u,y) or MATLAB .mat (t, u, y, Ts)");
+    for (auto* c : {list, export_cmd}) {
+      c->add_option("--db", store_args->db, "catalogue (idrig-catalog's db_path)");
+      c->add_option("--experiments", store_args->store, "experiment store (idrig-logger's db_path)");
+    }
+    export_cmd->add_option("id", store_args->id, "experiment id (idrig experiment list)")->required();
+    export_cmd->add_option("--rig", store_args->rig, "rig id");
+    export_cmd->add_option("--out", store_args->out, "FILE.csv or FILE.mat")->required();
+    list->callback([store_args] {
+      std::unique_ptr<Catalog> catalog;
+      if (access(store_args->db.c_str(), R_OK) == 0) catalog = std::make_unique<Catalog>(store_args->db, true);
+      if (!catalog && access(store_args->store.c_str(), R_OK) != 0)
+        throw std::invalid_argument("neither the catalogue '" + store_args->db + "' nor the store '" +
+                                    store_args->store + "' exists (--db, --experiments)");
+      const auto rows = ExperimentsJson(catalog.get(), store_args->store);
+      std::cout << std::left << std::setw(8) << "rig" << std::setw(19) << "experiment" << std::setw(9) << "state"
+                << std::setw(9) << "samples" << std::setw(8) << "fs Hz" << std::setw(14) << "blocks" << std::setw(21)
+                << "started (UTC)" << "signal\n";
+      for (const auto& e : rows) {
+        const std::string blocks = e.value("in_store", false)
+            ? std::to_string(e.value("blocks_stored", 0)) + "/" + std::to_string(e.value("blocks_total", 0)) +
+                  (e.value("missing_blocks", 0) ? " (" + std::to_string(e.value("missing_blocks", 0)) + " lost)" : "")
+            : "not stored";
+        std::cout << std::left << std::setw(8) << e.value("rig_id", "") << std::setw(19)
+                  << e.value("experiment_id", int64_t{0}) << std::setw(9) << e.value("state", "") << std::setw(9)
+                  << e.value("samples_total", int64_t{0}) << std::setw(8) << e.value("sample_rate_hz", 0.0)
+                  << std::setw(14) << blocks << std::setw(21) << e.value("start_utc", "-") << e.value("signal_spec", "")
+                  << "\n";
+      }
+      if (rows.empty()) std::cout << "no experiment recorded\n";
+    });
+    export_cmd->callback([store_args] {
+      std::string spec;
+      const IoRecord r = LoadExperimentRecord(store_args->store, store_args->rig, store_args->id, &spec);
+      WriteRecordFile(r, store_args->out, {{"rig_id", store_args->rig}, {"experiment_id", std::to_string(store_args->id)},
+                                           {"signal_spec", spec}});
+      std::cerr << "wrote experiment " << store_args->id << " (" << spec << "): " << r.NumSamples()
+                << " samples at Ts " << r.sample_time << " s to " << store_args->out << "\n";
     });
     stop->callback([args] {
       ServiceClient client(args->url);

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/io/mat_io.h"
 #include "core/methods/registry.h"
 #include "tools/idrig/commands.h"
 
@@ -51,8 +52,9 @@ nlohmann::json ParseFrequencies(const std::string& text) {
 
 void RegisterIdentifyCommand(CLI::App& app) {
   struct Args {
-    std::string data, method = "arx", options_json, frequencies;
+    std::string data, method = "arx", options_json, frequencies, u_names, y_names;
     int order = 0;
+    double ts = 0.0;
     std::vector<std::string> options;
     bool json = false;
   };
@@ -60,7 +62,10 @@ void RegisterIdentifyCommand(CLI::App& app) {
   std::string methods_help = "identification method:";
   for (const auto& m : Methods()) methods_help += "\n  " + m.name + ": " + m.summary;
   auto* cmd = app.add_subcommand("identify", "identify a model from a record (CSV t,u,y or t,u1,..,y1,..)");
-  cmd->add_option("--data", args->data, "data file")->required();
+  cmd->add_option("--data", args->data, "data file: CSV record or FRF table, or MATLAB .mat (with --u, --y)")->required();
+  cmd->add_option("--u", args->u_names, ".mat files: the input variable(s), comma-separated");
+  cmd->add_option("--y", args->y_names, ".mat files: the output variable(s), comma-separated");
+  cmd->add_option("--ts", args->ts, ".mat files: sample time [s] (default: the file's Ts, or its time vector t)");
   cmd->add_option("--method", args->method, methods_help);
   cmd->add_option("--order", args->order, "model order (0 or absent: chosen automatically)");
   cmd->add_option("--option", args->options, "method option key=value (value is JSON or a word); repeatable");
@@ -90,7 +95,16 @@ void RegisterIdentifyCommand(CLI::App& app) {
                                     "--option frequencies=[...]");
       options["frequencies"] = ParseFrequencies(args->frequencies);
     }
-    const MethodReport report = RunMethod(args->method, args->data, options);
+    const bool mat = args->data.size() > 4 && args->data.compare(args->data.size() - 4, 4, ".mat") == 0;
+    if (!mat && (!args->u_names.empty() || !args->y_names.empty() || args->ts != 0.0))
+      throw std::invalid_argument("--u, --y and --ts are for MATLAB .mat data; '" + args->data +
+                                  "' is read as CSV (t,u,y header)");
+    if (mat && (args->u_names.empty() || args->y_names.empty()))
+      throw std::invalid_argument(args->data + ": name the input and output variables: --u NAME --y NAME (variables: " +
+                                  [&] { std::string l; for (const auto& n : MatVariableNames(args->data)) l += (l.empty() ? "" : ", ") + n; return l; }() + ")");
+    const MethodReport report =
+        mat ? RunMethod(args->method, ReadMatRecord(args->data, args->u_names, args->y_names, args->ts), options)
+            : RunMethod(args->method, args->data, options);
     if (args->json) {
       nlohmann::json model = report.json.at("model");
       nlohmann::json identification = report.json;

@@ -13,8 +13,11 @@
 #include <sstream>
 
 #include "core/catalog/catalog.h"
+#include "core/io/mat_io.h"
 #include "core/io/model_json.h"
+#include "core/io/svg_plot.h"
 #include "core/transport/channels.h"
+#include "tools/idrig/catalog_views.h"
 #include "tools/idrig/commands.h"
 #include "tools/idrig/model_print.h"
 #include "tools/idrig/service_client.h"
@@ -176,53 +179,6 @@ void PrintHistory(Catalog& catalog, const std::string& rig, const std::string& m
   }
 }
 
-namespace {
-
-// The history as an SVG line plot (value against storage time), for a browser or a report.
-void WriteHistorySvg(Catalog& catalog, const std::string& rig, const std::string& metric,
-                     const std::string& method, const std::string& path) {
-  const auto history = catalog.History(rig, metric, method);
-  if (history.empty())
-    throw std::invalid_argument("no model of rig '" + rig + "' has metric '" + metric + "'");
-  double t0 = history.front().first.created_utime * 1e-6,
-         t1 = history.back().first.created_utime * 1e-6;
-  double lo = history[0].second, hi = lo;
-  for (const auto& h : history) {
-    lo = std::min(lo, h.second);
-    hi = std::max(hi, h.second);
-  }
-  if (hi - lo < 1e-12) {
-    lo -= 0.5;
-    hi += 0.5;
-  }
-  if (t1 - t0 < 1e-6) t1 = t0 + 1.0;
-  const double w = 640, h = 320, m = 50;
-  auto x = [&](double t) { return m + (w - 2 * m) * (t - t0) / (t1 - t0); };
-  auto y = [&](double v) { return h - m - (h - 2 * m) * (v - lo) / (hi - lo); };
-  std::ofstream out(path);
-  if (!out) throw std::invalid_argument("cannot write '" + path + "'");
-  out << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w << "' height='" << h << "'>\n"
-      << "<rect width='100%' height='100%' fill='white'/>\n"
-      << "<text x='" << m << "' y='20' font-family='sans-serif' font-size='14'>" << metric
-      << " of rig " << rig << (method.empty() ? "" : " (" + method + ")") << ", "
-      << TimeText(history.front().first.created_utime) << " .. "
-      << TimeText(history.back().first.created_utime) << " UTC</text>\n"
-      << "<text x='5' y='" << y(hi) + 4 << "' font-size='11'>" << Number(hi) << "</text>\n"
-      << "<text x='5' y='" << y(lo) + 4 << "' font-size='11'>" << Number(lo) << "</text>\n"
-      << "<polyline fill='none' stroke='steelblue' stroke-width='1.5' points='";
-  for (const auto& [model, value] : history)
-    out << x(model.created_utime * 1e-6) << "," << y(value) << " ";
-  out << "'/>\n";
-  for (const auto& [model, value] : history)
-    out << "<circle cx='" << x(model.created_utime * 1e-6) << "' cy='" << y(value)
-        << "' r='3' fill='steelblue'>"
-        << "<title>model " << model.model_id << " " << model.method << ": " << Number(value, 6)
-        << "</title></circle>\n";
-  out << "</svg>\n";
-}
-
-}  // namespace
-
 void RegisterModelsCommands(CLI::App& app) {
   // ---- models request|list|show|history
   {
@@ -243,7 +199,7 @@ void RegisterModelsCommands(CLI::App& app) {
         "history", "a parameter (pole, natural frequency, ...) over time for a rig");
     auto* export_cmd = group->add_subcommand(
         "export",
-        "write a model as idrig.model/1 JSON (with its lineage under \"identification\")");
+        "write a model as idrig.model/1 JSON (lineage under \"identification\") or, for --out FILE.mat, as MATLAB variables for tf/ss");
     auto* compare =
         group->add_subcommand("compare", "two models side by side: lineage and metrics");
     auto other = std::make_shared<int64_t>(0);
@@ -291,6 +247,9 @@ void RegisterModelsCommands(CLI::App& app) {
         }
         if (i % 20 == 19)
           client.RequestIdentify(args->rig, id, args->experiment, args->method, args->options);
+        if (i % 50 == 49)  // progress every 5 s
+          std::cerr << "  waiting for the catalogue's acknowledgement of request " << id << " ("
+                    << (i + 1) / 10 << " s of 60)\n";
       }
       if (args->wait) throw std::runtime_error("no acknowledgement within 60 s");
     });
@@ -307,20 +266,21 @@ void RegisterModelsCommands(CLI::App& app) {
     });
     export_cmd->callback([args, out] {
       Catalog catalog(args->db, true);
-      auto m = catalog.Model(args->id);
-      if (!m)
-        throw std::invalid_argument("no model " + std::to_string(args->id) + " in " + args->db);
-      nlohmann::json j = nlohmann::json::parse(m->model_json);
-      j["identification"] = {{"model_id", m->model_id},
-                             {"rig_id", m->rig_id},
-                             {"experiment_id", m->experiment_id},
-                             {"signal_spec", m->signal_spec},
-                             {"method", m->method},
-                             {"options", nlohmann::json::parse(m->options_json, nullptr, false)},
-                             {"data_hash", m->data_hash},
-                             {"software_version", m->software_version},
-                             {"created_utime", m->created_utime},
-                             {"fit_percent", m->fit_percent}};
+      const ModelRecord m = RequireModel(catalog, args->id, args->db);
+      nlohmann::json lineage = ModelLineageJson(m);
+      for (const auto& x : catalog.Metrics(m.model_id))
+        if (x.name == "record_fit_percent" || x.name == "dc_gain" || x.name == "order")
+          lineage[x.name] = x.value;
+      const bool mat = out->size() > 4 && out->compare(out->size() - 4, 4, ".mat") == 0;
+      if (mat) {  // MATLAB: tf(num, den, Ts, 'InputDelay', delay) or ss(A, B, C, D, Ts, ...)
+        WriteMatModel(ModelFromJson(nlohmann::json::parse(m.model_json)), *out, lineage);
+        std::cerr << "wrote model " << m.model_id << " to " << *out << " (variables "
+                  << (nlohmann::json::parse(m.model_json).value("kind", "") == "tf" ? "num, den" : "A, B, C, D")
+                  << ", Ts, delay, lineage)\n";
+        return;
+      }
+      nlohmann::json j = nlohmann::json::parse(m.model_json);
+      j["identification"] = lineage;
       if (out->empty()) {
         std::cout << j.dump(2) << "\n";
       } else {
@@ -331,33 +291,32 @@ void RegisterModelsCommands(CLI::App& app) {
     });
     compare->callback([args, other] {
       Catalog catalog(args->db, true);
-      auto a = catalog.Model(args->id), b = catalog.Model(*other);
-      if (!a || !b)
-        throw std::invalid_argument("no model " + std::to_string(!a ? args->id : *other) + " in " +
-                                    args->db);
-      const auto ma = MetricMap(catalog, a->model_id), mb = MetricMap(catalog, b->model_id);
-      std::cout << std::left << std::setw(16) << "" << std::setw(28)
-                << ("model " + std::to_string(a->model_id))
-                << ("model " + std::to_string(b->model_id)) << "\n";
-      auto row = [](const std::string& name, const std::string& x, const std::string& y) {
-        std::cout << std::left << std::setw(16) << name << std::setw(28) << x << y << "\n";
-      };
-      row("method", a->method, b->method);
-      row("experiment", std::to_string(a->experiment_id), std::to_string(b->experiment_id));
-      row("signal", a->signal_spec.substr(0, 26), b->signal_spec.substr(0, 26));
-      row("samples", std::to_string(a->n_samples), std::to_string(b->n_samples));
-      row("data sha256", a->data_hash.substr(0, 16), b->data_hash.substr(0, 16));
-      row("stored (UTC)", TimeText(a->created_utime), TimeText(b->created_utime));
-      std::set<std::string> names;
-      for (const auto& [k, v] : ma) names.insert(k);
-      for (const auto& [k, v] : mb) names.insert(k);
-      for (const auto& n : names)
-        row(n, ma.count(n) ? Number(ma.at(n), 6) : "-", mb.count(n) ? Number(mb.at(n), 6) : "-");
+      const ModelRecord a = RequireModel(catalog, args->id, args->db);
+      const ModelRecord b = RequireModel(catalog, *other, args->db);
+      const auto rows = CompareModels(catalog, a, b);
+      const std::string ha = "model " + std::to_string(a.model_id), hb = "model " + std::to_string(b.model_id);
+      size_t w0 = 4, w1 = ha.size(), w2 = hb.size();
+      auto name = [](const CompareRow& r) { return r.unit.empty() || r.unit == "1" ? r.name : r.name + " [" + r.unit + "]"; };
+      for (const auto& r : rows) {
+        w0 = std::max(w0, name(r).size());
+        w1 = std::max(w1, std::min<size_t>(r.a.size(), 40));
+        w2 = std::max(w2, std::min<size_t>(r.b.size(), 40));
+      }
+      auto cut = [](const std::string& t) { return t.size() > 40 ? t.substr(0, 39) + "~" : t; };
+      std::cout << std::left << std::setw(w0 + 2) << "" << std::setw(w1 + 2) << ha << std::setw(w2 + 2) << hb
+                << "difference (b - a)\n";
+      for (const auto& r : rows)
+        std::cout << std::left << std::setw(w0 + 2) << name(r) << std::setw(w1 + 2) << cut(r.a)
+                  << std::setw(w2 + 2) << cut(r.b) << r.difference << "\n";
     });
     history->callback([args, svg] {
       Catalog catalog(args->db, true);
       PrintHistory(catalog, args->rig, args->param, args->method);
-      if (!svg->empty()) WriteHistorySvg(catalog, args->rig, args->param, args->method, *svg);
+      if (svg->empty()) return;
+      const std::string text = LinePlotSvg(HistoryPlot(HistoryJson(catalog, args->rig, args->param, args->method)));
+      std::ofstream file(*svg);
+      if (!file) throw std::invalid_argument("cannot write '" + *svg + "'");
+      file << text;
     });
   }
 }

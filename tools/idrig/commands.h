@@ -16,4 +16,5 @@ void RegisterModelsCommands(CLI::App& app);      // cmd_models.cc
 void RegisterStatusCommand(CLI::App& app);       // cmd_status_spy.cc
 void RegisterSpyCommand(CLI::App& app);          // cmd_status_spy.cc
 void RegisterGapCommand(CLI::App& app);     // cmd_gap.cc
+void RegisterServeCommand(CLI::App& app);   // cmd_serve.cc: the dashboard
 }  // namespace idrig

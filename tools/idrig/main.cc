@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   idrig::RegisterSpyCommand(app);
   idrig::SetCommandLine(argc, argv);
   idrig::RegisterGapCommand(app);
+  idrig::RegisterServeCommand(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -188,4 +188,13 @@ std::string ExecutableDir() {
   return s.substr(0, s.find_last_of('/'));
 }
 
+std::string CommandPathFromHere() {
+  const std::string exe = ExecutableDir() + "/idrig";
+  char cwd[4096] = {0};
+  if (!getcwd(cwd, sizeof(cwd) - 1)) return exe;
+  const std::string here = std::string(cwd) + "/";
+  if (exe.compare(0, here.size(), here) == 0) return exe.substr(here.size());
+  return exe;
+}
+
 }  // namespace idrig

@@ -66,5 +66,8 @@ void StopChild(ChildProcess& child, double grace_s = 2.0);
 bool ChildAlive(const ChildProcess& child);
 // Directory of the running executable (to find idrig-* next to idrig).
 std::string ExecutableDir();
+// The running idrig (/proc/self/exe) as a command that works from the current directory:
+// relative ("build/bin/idrig") when it lies below it, else absolute.
+std::string CommandPathFromHere();
 
 }  // namespace idrig

@@ -169,7 +169,8 @@ TEST(Catalog, NotACatalogueIsAnError) {
 }
 
 TEST(ExperimentStore, FindsGapsBySequenceNumber) {
-  ExperimentStore store(TempPath("experiments"));
+  const std::string store_path = TempPath("experiments");
+  ExperimentStore store(store_path);
   store.Begin();
   for (int64_t seq : {0, 1, 3, 4, 4, 7}) {
     StoredBlock b;
@@ -190,6 +191,15 @@ TEST(ExperimentStore, FindsGapsBySequenceNumber) {
   store.UpdateExperiment(e);
   EXPECT_EQ(store.MissingBlocks("rig-a", 1), (std::vector<int64_t>{2, 5, 6, 8, 9}));
   EXPECT_EQ(store.Blocks("rig-a", 1, {0, 1}).size(), 3u);
+
+  // Read-only (the dashboard): the same answers, and writes are refused by SQLite.
+  ExperimentStore reader(store_path, true);
+  EXPECT_EQ(reader.MissingBlocks("rig-a", 1), (std::vector<int64_t>{2, 5, 6, 8, 9}));
+  StoredBlock b;
+  b.seq = 2;
+  b.data = {1};
+  EXPECT_THROW(reader.AddBlock("rig-a", 1, b), std::runtime_error);
+  EXPECT_THROW(ExperimentStore(TempPath("no_such_store"), true), std::runtime_error);
 }
 
 }  // namespace
