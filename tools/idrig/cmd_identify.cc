@@ -51,7 +51,7 @@ nlohmann::json ParseFrequencies(const std::string& text) {
 
 void RegisterIdentifyCommand(CLI::App& app) {
   struct Args {
-    std::string data, method = "arx", options_json, frequencies;
+    std::string data, method = "auto", options_json, frequencies;
     int order = 0;
     std::vector<std::string> options;
     bool json = false;
@@ -61,7 +61,7 @@ void RegisterIdentifyCommand(CLI::App& app) {
   for (const auto& m : Methods()) methods_help += "\n  " + m.name + ": " + m.summary;
   auto* cmd = app.add_subcommand("identify", "identify a model from a record (CSV t,u,y or t,u1,..,y1,..)");
   cmd->add_option("--data", args->data, "data file")->required();
-  cmd->add_option("--method", args->method, methods_help);
+  cmd->add_option("--method", args->method, methods_help + "\n(default: auto)");
   cmd->add_option("--order", args->order, "model order (0 or absent: chosen automatically)");
   cmd->add_option("--option", args->options, "method option key=value (value is JSON or a word); repeatable");
   cmd->add_option("--options-json", args->options_json, "method options as one JSON object");

@@ -1,0 +1,152 @@
+// `auto`: the default of `idrig identify`. Every applicable method (SISO: oe, n4sid, arx-oe;
+// MIMO: n4sid, oe per output) at every order 1..max_order is estimated on the first two thirds
+// of the record; each model simulates the whole record from rest and is scored on the last
+// third (mean simulation fit over the outputs). The choice is the smallest order whose NRMSE
+// is within 2 % of the best; among methods at that order, the first in the candidate list
+// (oe first: under white output noise it is the maximum-likelihood estimate). The winner is
+// then refitted on the whole record and its report returned, with the table of candidates.
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+#include "core/io/model_json.h"
+#include "core/methods/subspace_pem_method.h"
+#include "core/numeric/validation.h"
+
+namespace idrig {
+namespace {
+
+using nlohmann::json;
+
+struct Candidate {
+  std::string method;
+  int order = 0;
+  double fit = -std::numeric_limits<double>::infinity();  // mean validation fit [%]
+  std::string note;                                      // why it was not scored
+};
+
+MethodReport RunAuto(const MethodInput& input, const json& o) {
+  CheckOptionKeys(o, {"order", "max_order", "candidates", "tolerance"}, "auto");
+  const IoRecord& record = *input.record;
+  const bool siso = record.NumInputs() == 1 && record.NumOutputs() == 1;
+  std::vector<std::string> methods = siso ? std::vector<std::string>{"oe", "n4sid", "arx-oe"}
+                                          : std::vector<std::string>{"n4sid", "oe"};
+  if (o.contains("candidates")) {
+    if (!o["candidates"].is_array() || o["candidates"].empty())
+      throw std::invalid_argument("auto: option 'candidates' must be a non-empty list of method names");
+    methods.clear();
+    for (const auto& m : o["candidates"]) {
+      if (!m.is_string()) throw std::invalid_argument("auto: option 'candidates' must list method names");
+      FindMethod(m.get<std::string>());
+      methods.push_back(m.get<std::string>());
+    }
+  }
+  int max_order = 6, only_order = 0;
+  if (o.contains("max_order")) {
+    if (!o["max_order"].is_number_integer() || o["max_order"].get<int>() < 1)
+      throw std::invalid_argument("auto: option 'max_order' must be an integer >= 1");
+    max_order = o["max_order"].get<int>();
+  }
+  if (o.contains("order")) {
+    if (!o["order"].is_number_integer() || o["order"].get<int>() < 0)
+      throw std::invalid_argument("auto: option 'order' must be an integer >= 1");
+    only_order = o["order"].get<int>();
+  }
+  double tolerance = 0.02;
+  if (o.contains("tolerance")) {
+    if (!o["tolerance"].is_number() || o["tolerance"].get<double>() < 0)
+      throw std::invalid_argument("auto: option 'tolerance' must be a number >= 0 (relative NRMSE)");
+    tolerance = o["tolerance"].get<double>();
+  }
+  const int samples = record.NumSamples();
+  const int split = samples - samples / 3;
+  if (samples / 3 < 10)
+    throw std::invalid_argument("auto: the record has " + std::to_string(samples) +
+                                " samples; choosing a model on held-out data needs at least 30");
+  const IoRecord head = Slice(record, 0, split);
+  std::vector<Candidate> table;
+  for (int n = only_order > 0 ? only_order : 1; n <= (only_order > 0 ? only_order : max_order); ++n) {
+    for (const auto& m : methods) {
+      Candidate c;
+      c.method = m;
+      c.order = n;
+      try {
+        const MethodReport r = RunMethod(m, head, {{"order", n}});
+        const std::string status = r.json.value("status", "failed");
+        if (status == "failed") {
+          c.note = "status failed: " + r.json.value("message", "");
+        } else {
+          const LtiModel model = ModelFromJson(r.json.at("model"));
+          const Eigen::MatrixXd sim = Simulate(model, record.u, record.sample_time);
+          const Eigen::VectorXd fit = FitPercent(record.y.bottomRows(samples - split), sim.bottomRows(samples - split));
+          c.fit = fit.allFinite() ? fit.mean() : -std::numeric_limits<double>::infinity();
+          if (status != "ok") c.note = "status " + status;
+        }
+      } catch (const std::exception& e) {
+        c.note = e.what();
+      }
+      table.push_back(c);
+    }
+  }
+  double best = -std::numeric_limits<double>::infinity();
+  for (const auto& c : table) best = std::max(best, c.fit);
+  if (!std::isfinite(best)) {
+    std::string why;
+    for (const auto& c : table) why += "\n  " + c.method + " n=" + std::to_string(c.order) + ": " + c.note;
+    throw std::invalid_argument("auto: no candidate method gave a usable model on the record:" + why);
+  }
+  const double best_nrmse = 1.0 - best / 100.0;
+  const Candidate* chosen = nullptr;
+  for (const auto& c : table)  // ordered by order, then by preference
+    if (std::isfinite(c.fit) && 1.0 - c.fit / 100.0 <= (1.0 + tolerance) * best_nrmse + 1e-12) { chosen = &c; break; }
+  MethodReport report = RunMethod(chosen->method, record, {{"order", chosen->order}});
+  json selection;
+  json rows = json::array();
+  for (const auto& c : table)
+    rows.push_back({{"method", c.method}, {"order", c.order},
+                    {"validation_fit_percent", std::isfinite(c.fit) ? json(c.fit) : json(nullptr)}, {"note", c.note}});
+  std::ostringstream rule;
+  rule << "estimated on samples 0.." << split - 1 << ", scored on " << split << ".." << samples - 1
+       << " (simulation from rest); the smallest order within " << 100 * tolerance
+       << " % of the best NRMSE, then the first method in the list (" ;
+  for (size_t k = 0; k < methods.size(); ++k) rule << (k ? ", " : "") << methods[k];
+  rule << ")";
+  selection["candidates"] = rows;
+  selection["rule"] = rule.str();
+  selection["chosen"] = {{"method", chosen->method}, {"order", chosen->order}, {"validation_fit_percent", chosen->fit}};
+  selection["best_validation_fit_percent"] = best;
+  report.json["chosen_method"] = chosen->method;
+  report.json["selection"] = selection;
+  std::ostringstream t;
+  t << std::setprecision(4) << std::fixed;
+  t << "Method and order chosen on held-out data: " << rule.str() << "\n\n  order";
+  for (const auto& m : methods) t << std::setw(12) << m;
+  t << "   (fit % on the last third)\n";
+  for (size_t k = 0; k < table.size(); k += methods.size()) {
+    t << "  " << std::setw(5) << table[k].order;
+    for (size_t i = 0; i < methods.size(); ++i) {
+      const Candidate& c = table[k + i];
+      std::ostringstream cell;
+      cell << std::setprecision(2) << std::fixed;
+      if (std::isfinite(c.fit)) cell << c.fit; else cell << "-";
+      t << std::setw(11) << cell.str() << (&c == chosen ? "*" : " ");
+    }
+    t << "\n";
+  }
+  t << "\nchosen: " << chosen->method << " order " << chosen->order << " (validation fit " << chosen->fit
+    << " %, best " << best << " %); refitted on the whole record:\n\n";
+  report.text = t.str() + report.text;
+  return report;
+}
+
+}  // namespace
+
+MethodInfo AutoMethod() {
+  return {"auto",
+          "default: every applicable method and order estimated on 2/3 of the record, chosen by fit on the last "
+          "third, refitted on all of it",
+          true, [](const MethodInput& in, const json& o) { return RunAuto(in, o); }};
+}
+
+}  // namespace idrig
