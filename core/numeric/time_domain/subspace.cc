@@ -38,18 +38,25 @@ Eigen::MatrixXd HankelGram(const Eigen::MatrixXd& z, int shifts,
                            const std::vector<std::pair<int, int>>& rows) {
   const int m = static_cast<int>(z.cols());
   const long j = z.rows() - shifts + 1;
+  // First row and column of every lag table at once: c_ab(0,l) = (Z_0ᵀ Z_l)_ab and
+  // c_ab(k,0) = (Z_kᵀ Z_0)_ab with Z_k = z(k : k+j−1, :), m×m products over j samples.
+  const auto z0 = z.topRows(j);
+  std::vector<Eigen::MatrixXd> first_row(shifts), first_col(shifts);
+  for (int l = 0; l < shifts; ++l) {
+    first_row[l].noalias() = z0.transpose() * z.middleRows(l, j);
+    if (l > 0) first_col[l] = first_row[l].transpose();  // Z_lᵀ Z_0 = (Z_0ᵀ Z_l)ᵀ
+  }
   std::vector<Eigen::MatrixXd> table(m * m);
   for (int a = 0; a < m; ++a) {
-    for (int b = a; b < m; ++b) {
+    for (int b = 0; b < m; ++b) {
       Eigen::MatrixXd c(shifts, shifts);
       const auto za = z.col(a), zb = z.col(b);
-      for (int l = 0; l < shifts; ++l) c(0, l) = za.segment(0, j).dot(zb.segment(l, j));
-      for (int k = 1; k < shifts; ++k) c(k, 0) = za.segment(k, j).dot(zb.segment(0, j));
+      for (int l = 0; l < shifts; ++l) c(0, l) = first_row[l](a, b);
+      for (int k = 1; k < shifts; ++k) c(k, 0) = first_col[k](a, b);
       for (int k = 0; k + 1 < shifts; ++k)
         for (int l = 0; l + 1 < shifts; ++l)
           c(k + 1, l + 1) = c(k, l) + za(k + j) * zb(l + j) - za(k) * zb(l);
       table[a * m + b] = c / static_cast<double>(j);
-      if (a != b) table[b * m + a] = table[a * m + b].transpose();
     }
   }
   const int size = static_cast<int>(rows.size());
@@ -160,38 +167,47 @@ Eigen::VectorXd EstimateInputMatrices(const Eigen::MatrixXd& u, const Eigen::Mat
   const int nrec = ny * nu + ny;
   Eigen::MatrixXd w = Eigen::MatrixXd::Zero(nrec, n), wnext(nrec, n);
   if (estimate_x0) w.bottomRows(ny) = model->C;
+  // Regressors are the columns of Φᵀ (contiguous), reduced to ΦᵀΦ in blocks.
   constexpr int kBlock = 256;
-  Eigen::MatrixXd phi(kBlock * ny, p), gram = Eigen::MatrixXd::Zero(p, p);
-  Eigen::VectorXd target(kBlock * ny), rhs = Eigen::VectorXd::Zero(p);
-  double yy = 0.0;
+  // Row p of Φᵀ holds the target, so one rank update gives [ΦᵀΦ Φᵀy; yᵀΦ yᵀy].
+  Eigen::MatrixXd phi_t(p + 1, kBlock * ny), full = Eigen::MatrixXd::Zero(p + 1, p + 1);
   int filled = 0;
+  bool x0_alive = estimate_x0;
+  const double c_scale = std::max(model->C.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
   auto flush = [&] {
     if (filled == 0) return;
-    const auto block = phi.topRows(filled);
-    gram.selfadjointView<Eigen::Lower>().rankUpdate(block.transpose());
-    rhs.noalias() += block.transpose() * target.head(filled);
-    yy += target.head(filled).squaredNorm();
+    full.selfadjointView<Eigen::Lower>().rankUpdate(phi_t.leftCols(filled));
     filled = 0;
   };
   for (long k = 0; k < samples; ++k) {
     for (int r = 0; r < ny; ++r) {
-      auto row = phi.row(filled);
-      row.setZero();
-      for (int q = 0; q < nu; ++q) row.segment(q * n, n) = w.row(r * nu + q);
-      if (feedthrough)
-        for (int q = 0; q < nu; ++q) row(pb + q * ny + r) = u(k, q);
-      if (estimate_x0) row.segment(pb + pd, n) = w.row(ny * nu + r);
-      target(filled) = y(k, r);
+      auto col = phi_t.col(filled);
+      for (int q = 0; q < nu; ++q) col.segment(q * n, n) = w.row(r * nu + q).transpose();
+      if (feedthrough) {
+        col.segment(pb, pd).setZero();
+        for (int q = 0; q < nu; ++q) col(pb + q * ny + r) = u(k, q);
+      }
+      if (estimate_x0) col.segment(pb + pd, n) = w.row(ny * nu + r).transpose();
+      col(p) = y(k, r);
       ++filled;
     }
-    if (filled + ny > phi.rows()) flush();
-    wnext.noalias() = w * model->A;
+    if (filled + ny > phi_t.cols()) flush();
+    wnext.noalias() = w.lazyProduct(model->A);  // small: no GEMM blocking per sample
     for (int r = 0; r < ny; ++r)
       for (int q = 0; q < nu; ++q) wnext.row(r * nu + q) += model->C.row(r) * u(k, q);
     w.swap(wnext);
+    // The free response C A^k decays: zero it before it turns denormal (denormal arithmetic
+    // is two orders of magnitude slower).
+    if (x0_alive && w.bottomRows(ny).cwiseAbs().maxCoeff() < 1e-150 * c_scale) {
+      w.bottomRows(ny).setZero();
+      x0_alive = false;
+    }
   }
   flush();
-  gram.triangularView<Eigen::StrictlyUpper>() = gram.transpose();
+  full.triangularView<Eigen::StrictlyUpper>() = full.transpose();
+  const Eigen::MatrixXd gram = full.topLeftCorner(p, p);
+  const Eigen::VectorXd rhs = full.col(p).head(p);
+  const double yy = full(p, p);
   // Column-equilibrated pseudo-inverse (x0 is poorly determined when A decays fast).
   Eigen::VectorXd scale = gram.diagonal().cwiseMax(std::numeric_limits<double>::min()).cwiseSqrt().cwiseInverse();
   const Eigen::MatrixXd scaled = scale.asDiagonal() * gram * scale.asDiagonal();
