@@ -40,12 +40,15 @@ Eigen::MatrixXd HankelGram(const Eigen::MatrixXd& z, int shifts,
   const long j = z.rows() - shifts + 1;
   // First row and column of every lag table at once: c_ab(0,l) = (Z_0ᵀ Z_l)_ab and
   // c_ab(k,0) = (Z_kᵀ Z_0)_ab with Z_k = z(k : k+j−1, :), m×m products over j samples.
-  const auto z0 = z.topRows(j);
-  std::vector<Eigen::MatrixXd> first_row(shifts), first_col(shifts);
-  for (int l = 0; l < shifts; ++l) {
-    first_row[l].noalias() = z0.transpose() * z.middleRows(l, j);
-    if (l > 0) first_col[l] = first_row[l].transpose();  // Z_lᵀ Z_0 = (Z_0ᵀ Z_l)ᵀ
+  // In chunks of samples that stay in cache for all lags.
+  std::vector<Eigen::MatrixXd> first_row(shifts, Eigen::MatrixXd::Zero(m, m)), first_col(shifts);
+  constexpr long kChunk = 2048;
+  for (long t0 = 0; t0 < j; t0 += kChunk) {
+    const long len = std::min(kChunk, j - t0);
+    const auto head = z.middleRows(t0, len);
+    for (int l = 0; l < shifts; ++l) first_row[l].noalias() += head.transpose() * z.middleRows(t0 + l, len);
   }
+  for (int l = 1; l < shifts; ++l) first_col[l] = first_row[l].transpose();  // Z_lᵀ Z_0 = (Z_0ᵀ Z_l)ᵀ
   std::vector<Eigen::MatrixXd> table(m * m);
   for (int a = 0; a < m; ++a) {
     for (int b = 0; b < m; ++b) {
@@ -147,8 +150,8 @@ Eigen::MatrixXd SimulateFrom(const StateSpace& model, const Eigen::MatrixXd& u,
   Eigen::MatrixXd y(u.rows(), model.NumOutputs());
   Eigen::VectorXd next(n);
   for (long k = 0; k < u.rows(); ++k) {
-    y.row(k) = (model.C * x + model.D * ud.row(k).transpose()).transpose();
-    next.noalias() = model.A * x + model.B * ud.row(k).transpose();
+    y.row(k) = (model.C.lazyProduct(x) + model.D.lazyProduct(ud.row(k).transpose())).transpose();
+    next.noalias() = model.A.lazyProduct(x) + model.B.lazyProduct(ud.row(k).transpose());
     x.swap(next);
   }
   return y;
@@ -169,16 +172,23 @@ Eigen::VectorXd EstimateInputMatrices(const Eigen::MatrixXd& u, const Eigen::Mat
   if (estimate_x0) w.bottomRows(ny) = model->C;
   // Regressors are the columns of Φᵀ (contiguous), reduced to ΦᵀΦ in blocks.
   constexpr int kBlock = 256;
-  // Row p of Φᵀ holds the target, so one rank update gives [ΦᵀΦ Φᵀy; yᵀΦ yᵀy].
-  Eigen::MatrixXd phi_t(p + 1, kBlock * ny), full = Eigen::MatrixXd::Zero(p + 1, p + 1);
+  // Rows of Φᵀ: [vec B | vec D | target | x0], so one rank update gives ΦᵀΦ, Φᵀy and yᵀy;
+  // once the free response has decayed, the x0 rows are zero and only the leading corner
+  // is updated.
+  const int q_target = pb + pd, rows = p + 1;
+  Eigen::MatrixXd phi_t = Eigen::MatrixXd::Zero(rows, kBlock * ny), full = Eigen::MatrixXd::Zero(rows, rows);
   int filled = 0;
-  bool x0_alive = estimate_x0;
+  bool x0_alive = estimate_x0, block_has_x0 = estimate_x0;
   const double c_scale = std::max(model->C.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
   auto flush = [&] {
     if (filled == 0) return;
-    full.selfadjointView<Eigen::Lower>().rankUpdate(phi_t.leftCols(filled));
+    if (block_has_x0) full.selfadjointView<Eigen::Lower>().rankUpdate(phi_t.leftCols(filled));
+    else full.topLeftCorner(q_target + 1, q_target + 1).selfadjointView<Eigen::Lower>().rankUpdate(
+             phi_t.topLeftCorner(q_target + 1, filled));
+    block_has_x0 = x0_alive;
     filled = 0;
   };
+  const int live = ny * nu;  // recursions ρ_rq; the last ny rows of w are σ_r
   for (long k = 0; k < samples; ++k) {
     for (int r = 0; r < ny; ++r) {
       auto col = phi_t.col(filled);
@@ -187,12 +197,14 @@ Eigen::VectorXd EstimateInputMatrices(const Eigen::MatrixXd& u, const Eigen::Mat
         col.segment(pb, pd).setZero();
         for (int q = 0; q < nu; ++q) col(pb + q * ny + r) = u(k, q);
       }
-      if (estimate_x0) col.segment(pb + pd, n) = w.row(ny * nu + r).transpose();
-      col(p) = y(k, r);
+      col(q_target) = y(k, r);
+      if (x0_alive) col.segment(q_target + 1, n) = w.row(live + r).transpose();
+      else if (estimate_x0) col.segment(q_target + 1, n).setZero();
       ++filled;
     }
     if (filled + ny > phi_t.cols()) flush();
-    wnext.noalias() = w.lazyProduct(model->A);  // small: no GEMM blocking per sample
+    if (x0_alive) wnext.noalias() = w.lazyProduct(model->A);  // small: no GEMM blocking per sample
+    else wnext.topRows(live).noalias() = w.topRows(live).lazyProduct(model->A);
     for (int r = 0; r < ny; ++r)
       for (int q = 0; q < nu; ++q) wnext.row(r * nu + q) += model->C.row(r) * u(k, q);
     w.swap(wnext);
@@ -200,14 +212,22 @@ Eigen::VectorXd EstimateInputMatrices(const Eigen::MatrixXd& u, const Eigen::Mat
     // is two orders of magnitude slower).
     if (x0_alive && w.bottomRows(ny).cwiseAbs().maxCoeff() < 1e-150 * c_scale) {
       w.bottomRows(ny).setZero();
+      wnext.bottomRows(ny).setZero();
       x0_alive = false;
     }
   }
   flush();
   full.triangularView<Eigen::StrictlyUpper>() = full.transpose();
-  const Eigen::MatrixXd gram = full.topLeftCorner(p, p);
-  const Eigen::VectorXd rhs = full.col(p).head(p);
-  const double yy = full(p, p);
+  std::vector<int> order;  // θ = (vec B, vec D, x0) in `full`
+  for (int i = 0; i < rows; ++i)
+    if (i != q_target) order.push_back(i);
+  Eigen::MatrixXd gram(p, p);
+  Eigen::VectorXd rhs(p);
+  for (int a = 0; a < p; ++a) {
+    rhs(a) = full(order[a], q_target);
+    for (int b = 0; b < p; ++b) gram(a, b) = full(order[a], order[b]);
+  }
+  const double yy = full(q_target, q_target);
   // Column-equilibrated pseudo-inverse (x0 is poorly determined when A decays fast).
   Eigen::VectorXd scale = gram.diagonal().cwiseMax(std::numeric_limits<double>::min()).cwiseSqrt().cwiseInverse();
   const Eigen::MatrixXd scaled = scale.asDiagonal() * gram * scale.asDiagonal();
