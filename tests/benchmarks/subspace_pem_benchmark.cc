@@ -272,15 +272,20 @@ int Real(const std::string& shared, const std::string& dir) {
     std::printf("%-14s N=%d nu=%d ny=%d  default: %s n=%d fit %.1f %% (%s) [%.2f s]", rec.name.c_str(), samples,
                 full.NumInputs(), full.NumOutputs(), def.json.value("chosen_method", "?").c_str(), order,
                 fit_default, per_text.c_str(), t_auto);
-    for (const char* m : {"n4sid", "oe"}) {
-      double fit = NAN;
-      try {
-        const MethodReport r = RunMethod(m, est, {{"order", order}});
-        if (!r.json.at("model").is_null()) fit = ValidationFit(ModelFromJson(r.json.at("model")), full, split, &per);
-      } catch (const std::exception& e) {
-        std::printf(" [%s: %s]", m, e.what());
+    std::ofstream results(dir + "/real_idrig_" + rec.name + ".txt");
+    results << rec.name << " default " << order << " " << fit_default << "\n";
+    for (int n = 1; n <= 8; ++n) {
+      for (const char* m : {"n4sid", "oe"}) {
+        double fit = NAN;
+        try {
+          const MethodReport r = RunMethod(m, est, {{"order", n}});
+          if (!r.json.at("model").is_null()) fit = ValidationFit(ModelFromJson(r.json.at("model")), full, split, &per);
+        } catch (const std::exception& e) {
+          if (n == order) std::printf(" [%s: %s]", m, e.what());
+        }
+        if (n == order) std::printf("  %s %.1f %%", m, fit);
+        results << rec.name << " " << m << " " << n << " " << fit << "\n";
       }
-      std::printf("  %s %.1f %%", m, fit);
     }
     std::printf("\n");
     std::fflush(stdout);

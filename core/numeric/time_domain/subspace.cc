@@ -300,15 +300,21 @@ SubspaceResult IdentifySubspace(const IoRecord& record, const SubspaceOptions& o
   for (int k = i; k < 2 * i; ++k) for (int b = 0; b < ny; ++b) rows.push_back({nu + b, k});
   Eigen::MatrixXd gram = HankelGram(z, 2 * i, rows);
   const int uf = i * nu, wp = i * m, yf = i * ny;
+  bool weakly_exciting = false;
   {
-    // Persistent excitation of order 2i: the input block of the Gram matrix must be regular.
-    Eigen::MatrixXd gu(2 * uf, 2 * uf);
-    gu = gram.topLeftCorner(2 * uf, 2 * uf);
+    // Persistent excitation of order 2i: the input block of the Gram matrix should be regular.
+    // A very smooth or few-line input fails this numerically; the factorisation below is then
+    // regularised and the result flagged (constant or dependent inputs were refused above).
+    const Eigen::MatrixXd gu = gram.topLeftCorner(2 * uf, 2 * uf);
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gu, Eigen::EigenvaluesOnly);
-    if (eig.eigenvalues()(0) < 1e-11 * eig.eigenvalues()(2 * uf - 1))
-      Fail("the input is not persistently exciting of order 2i = " + std::to_string(2 * i) +
-           " (its block Hankel matrix is rank deficient, e.g. too few sine lines or a slow "
-           "periodic input): use a richer input or fewer block_rows");
+    const double ratio = eig.eigenvalues()(0) / eig.eigenvalues()(2 * uf - 1);
+    if (ratio < 1e-11) {
+      weakly_exciting = true;
+      result.warnings.push_back("the input is not persistently exciting of order 2i = " + std::to_string(2 * i) +
+                                " (its block Hankel matrix has condition " + Num(1.0 / std::max(ratio, 1e-300)) +
+                                ", e.g. too few sine lines or a very smooth input): the estimate rests on a "
+                                "regularised factorisation; use a richer input or fewer block_rows");
+    }
   }
   // LQ factor H = L Qᵀ from the Cholesky factor of H Hᵀ (a tiny jitter if H is rank
   // deficient, e.g. noise-free data).
@@ -401,6 +407,9 @@ SubspaceResult IdentifySubspace(const IoRecord& record, const SubspaceOptions& o
     msg << "; the model is unstable (spectral radius " << Num(result.spectral_radius)
         << "): set enforce_stability=true or lower the order";
     result.warnings.push_back("unstable model");
+  } else if (weakly_exciting) {
+    result.status = SolverStatus::kIllConditioned;
+    msg << "; the input is not persistently exciting of order 2i = " << 2 * i;
   } else {
     result.status = SolverStatus::kOk;
   }

@@ -151,12 +151,15 @@ TEST(Subspace, BadInputIsRejectedWithAMessage) {
   EXPECT_NE(message_of(MakeIoRecord(twins, y, 0.1), {}).find("linearly dependent"), std::string::npos);
   // A record with no output columns (columns that do not split into inputs and outputs).
   EXPECT_NE(message_of(MakeIoRecord(u, Eigen::MatrixXd(200, 0), 0.1), {}).find("no output"), std::string::npos);
-  // A single sine is persistently exciting of order 2 only.
+  // A single sine is persistently exciting of order 2 only: a result, but not an ok one.
   Eigen::MatrixXd sine(400, 1);
   for (int k = 0; k < 400; ++k) sine(k, 0) = std::sin(0.3 * k);
   SubspaceOptions small;
   small.max_order = 2;
-  EXPECT_NE(message_of(MakeIoRecord(sine, sine, 0.1), small).find("persistently exciting"), std::string::npos);
+  const SubspaceResult weak = IdentifySubspace(MakeIoRecord(sine, sine, 0.1), small);
+  EXPECT_FALSE(weak.ok());
+  ASSERT_FALSE(weak.warnings.empty());
+  EXPECT_NE(weak.warnings[0].find("not persistently exciting"), std::string::npos);
   // Order above what the block rows allow.
   SubspaceOptions high;
   high.order = 12;
