@@ -1,10 +1,11 @@
 // `auto`: the default of `idrig identify`. Every applicable method (SISO: oe, n4sid, arx-oe;
-// MIMO: n4sid, oe per output) at every order 1..max_order is estimated on the first two thirds
-// of the record; each model simulates the whole record from rest and is scored on the last
-// third (mean simulation fit over the outputs). The choice is the smallest order whose NRMSE
-// is within 2 % of the best; among methods at that order, the first in the candidate list
-// (oe first: under white output noise it is the maximum-likelihood estimate). The winner is
-// then refitted on the whole record and its report returned, with the table of candidates.
+// MIMO: n4sid, oe per output), each also with a direct input term (oe with input_delay 0,
+// n4sid with D), at every order 1..max_order is estimated on the first two thirds of the
+// record; each model simulates the whole record from rest and is scored on the last third
+// (mean simulation fit over the outputs). The choice is the smallest order whose NRMSE is
+// within 2 % of the best; among candidates at that order, the first in the list (oe first:
+// under white output noise it is the maximum-likelihood estimate). The winner is refitted on
+// the whole record and its report returned, with the table of candidates.
 #include <cmath>
 #include <iomanip>
 #include <limits>
@@ -19,8 +20,15 @@ namespace {
 
 using nlohmann::json;
 
+// A method with fixed options: e.g. "oe nk=0" is oe with input_delay 0 (a direct term b0).
+struct Variant {
+  std::string label, method;
+  json options;
+};
+
 struct Candidate {
-  std::string method;
+  std::string label, method;
+  json options;
   int order = 0;
   double fit = -std::numeric_limits<double>::infinity();  // mean validation fit [%]
   std::string note;                                      // why it was not scored
@@ -30,16 +38,23 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
   CheckOptionKeys(o, {"order", "max_order", "candidates", "tolerance"}, "auto");
   const IoRecord& record = *input.record;
   const bool siso = record.NumInputs() == 1 && record.NumOutputs() == 1;
-  std::vector<std::string> methods = siso ? std::vector<std::string>{"oe", "n4sid", "arx-oe"}
-                                          : std::vector<std::string>{"n4sid", "oe"};
+  // Each method with and without a direct (same-sample) input term: real records often have
+  // one (a fast sensor, a sampling skew), a sampled plant under a zero-order hold has none.
+  const json direct_oe = {{"input_delay", 0}}, direct_n4sid = {{"feedthrough", true}};
+  std::vector<Variant> variants =
+      siso ? std::vector<Variant>{{"oe", "oe", json::object()}, {"n4sid", "n4sid", json::object()},
+                                  {"arx-oe", "arx-oe", json::object()}, {"oe nk=0", "oe", direct_oe},
+                                  {"n4sid D", "n4sid", direct_n4sid}}
+           : std::vector<Variant>{{"n4sid", "n4sid", json::object()}, {"oe", "oe", json::object()},
+                                  {"n4sid D", "n4sid", direct_n4sid}, {"oe nk=0", "oe", direct_oe}};
   if (o.contains("candidates")) {
     if (!o["candidates"].is_array() || o["candidates"].empty())
       throw std::invalid_argument("auto: option 'candidates' must be a non-empty list of method names");
-    methods.clear();
+    variants.clear();
     for (const auto& m : o["candidates"]) {
       if (!m.is_string()) throw std::invalid_argument("auto: option 'candidates' must list method names");
       FindMethod(m.get<std::string>());
-      methods.push_back(m.get<std::string>());
+      variants.push_back({m.get<std::string>(), m.get<std::string>(), json::object()});
     }
   }
   int max_order = 6, only_order = 0;
@@ -67,12 +82,15 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
   const IoRecord head = Slice(record, 0, split);
   std::vector<Candidate> table;
   for (int n = only_order > 0 ? only_order : 1; n <= (only_order > 0 ? only_order : max_order); ++n) {
-    for (const auto& m : methods) {
+    for (const auto& v : variants) {
       Candidate c;
-      c.method = m;
+      c.label = v.label;
+      c.method = v.method;
+      c.options = v.options;
+      c.options["order"] = n;
       c.order = n;
       try {
-        const MethodReport r = RunMethod(m, head, {{"order", n}});
+        const MethodReport r = RunMethod(v.method, head, c.options);
         const std::string status = r.json.value("status", "failed");
         if (status == "failed") {
           c.note = "status failed: " + r.json.value("message", "");
@@ -93,39 +111,40 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
   for (const auto& c : table) best = std::max(best, c.fit);
   if (!std::isfinite(best)) {
     std::string why;
-    for (const auto& c : table) why += "\n  " + c.method + " n=" + std::to_string(c.order) + ": " + c.note;
+    for (const auto& c : table) why += "\n  " + c.label + " n=" + std::to_string(c.order) + ": " + c.note;
     throw std::invalid_argument("auto: no candidate method gave a usable model on the record:" + why);
   }
   const double best_nrmse = 1.0 - best / 100.0;
   const Candidate* chosen = nullptr;
   for (const auto& c : table)  // ordered by order, then by preference
     if (std::isfinite(c.fit) && 1.0 - c.fit / 100.0 <= (1.0 + tolerance) * best_nrmse + 1e-12) { chosen = &c; break; }
-  MethodReport report = RunMethod(chosen->method, record, {{"order", chosen->order}});
+  MethodReport report = RunMethod(chosen->method, record, chosen->options);
   json selection;
   json rows = json::array();
   for (const auto& c : table)
-    rows.push_back({{"method", c.method}, {"order", c.order},
+    rows.push_back({{"candidate", c.label}, {"method", c.method}, {"options", c.options}, {"order", c.order},
                     {"validation_fit_percent", std::isfinite(c.fit) ? json(c.fit) : json(nullptr)}, {"note", c.note}});
   std::ostringstream rule;
   rule << "estimated on samples 0.." << split - 1 << ", scored on " << split << ".." << samples - 1
        << " (simulation from rest); the smallest order within " << 100 * tolerance
        << " % of the best NRMSE, then the first method in the list (" ;
-  for (size_t k = 0; k < methods.size(); ++k) rule << (k ? ", " : "") << methods[k];
+  for (size_t k = 0; k < variants.size(); ++k) rule << (k ? ", " : "") << variants[k].label;
   rule << ")";
   selection["candidates"] = rows;
   selection["rule"] = rule.str();
-  selection["chosen"] = {{"method", chosen->method}, {"order", chosen->order}, {"validation_fit_percent", chosen->fit}};
+  selection["chosen"] = {{"candidate", chosen->label}, {"method", chosen->method}, {"options", chosen->options},
+                         {"order", chosen->order}, {"validation_fit_percent", chosen->fit}};
   selection["best_validation_fit_percent"] = best;
   report.json["chosen_method"] = chosen->method;
   report.json["selection"] = selection;
   std::ostringstream t;
   t << std::setprecision(4) << std::fixed;
   t << "Method and order chosen on held-out data: " << rule.str() << "\n\n  order";
-  for (const auto& m : methods) t << std::setw(12) << m;
+  for (const auto& v : variants) t << std::setw(12) << v.label;
   t << "   (fit % on the last third)\n";
-  for (size_t k = 0; k < table.size(); k += methods.size()) {
+  for (size_t k = 0; k < table.size(); k += variants.size()) {
     t << "  " << std::setw(5) << table[k].order;
-    for (size_t i = 0; i < methods.size(); ++i) {
+    for (size_t i = 0; i < variants.size(); ++i) {
       const Candidate& c = table[k + i];
       std::ostringstream cell;
       cell << std::setprecision(2) << std::fixed;
@@ -134,7 +153,7 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
     }
     t << "\n";
   }
-  t << "\nchosen: " << chosen->method << " order " << chosen->order << " (validation fit " << chosen->fit
+  t << "\nchosen: " << chosen->label << " order " << chosen->order << " (validation fit " << chosen->fit
     << " %, best " << best << " %); refitted on the whole record:\n\n";
   report.text = t.str() + report.text;
   return report;

@@ -46,7 +46,7 @@ TEST(SubspacePemMethods, AutoChoosesTheThirdOrderPlantAndSaysWhy) {
   const MethodReport r = RunMethod("auto", Seed001Record(2000, 0.01, 2), nlohmann::json::object());
   EXPECT_EQ(r.json.at("method"), "auto");
   EXPECT_EQ(r.json.at("selection").at("chosen").at("order"), 3);
-  EXPECT_EQ(r.json.at("selection").at("candidates").size(), 18u);  // 3 methods x orders 1..6
+  EXPECT_EQ(r.json.at("selection").at("candidates").size(), 30u);  // 5 candidates x orders 1..6
   EXPECT_NE(r.text.find("chosen: "), std::string::npos);
   EXPECT_THROW(RunMethod("auto", Seed001Record(2000, 0.01, 2), {{"candidates", {"nope"}}}), std::invalid_argument);
 }
