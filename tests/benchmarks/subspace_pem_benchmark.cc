@@ -273,12 +273,18 @@ int Real(const std::string& shared, const std::string& dir) {
                 full.NumInputs(), full.NumOutputs(), def.json.value("chosen_method", "?").c_str(), order,
                 fit_default, per_text.c_str(), t_auto);
     std::ofstream results(dir + "/real_idrig_" + rec.name + ".txt");
-    results << rec.name << " default " << order << " " << fit_default << "\n";
+    std::string label = def.json.at("selection").at("chosen").value("candidate", "?");
+    std::replace(label.begin(), label.end(), ' ', '_');
+    results << rec.name << " default " << order << " " << fit_default << " " << label << "\n";
     for (int n = 1; n <= 8; ++n) {
-      for (const char* m : {"n4sid", "oe"}) {
+      const std::pair<const char*, nlohmann::json> variants[] = {
+          {"n4sid", {{"order", n}}}, {"n4sid_D", {{"order", n}, {"feedthrough", true}}},
+          {"oe", {{"order", n}}}, {"oe_nk0", {{"order", n}, {"input_delay", 0}}}};
+      for (const auto& [m, options] : variants) {
         double fit = NAN;
         try {
-          const MethodReport r = RunMethod(m, est, {{"order", n}});
+          const std::string method = std::string(m).substr(0, std::string(m).find('_'));
+          const MethodReport r = RunMethod(method, est, options);
           if (!r.json.at("model").is_null()) fit = ValidationFit(ModelFromJson(r.json.at("model")), full, split, &per);
         } catch (const std::exception& e) {
           if (n == order) std::printf(" [%s: %s]", m, e.what());

@@ -89,15 +89,17 @@ end
 OCT
 octave-cli -q "$dir/real.m" > /dev/null 2>&1 || true
 echo
-printf "| %-13s | %-17s | %-13s | %-10s | %-16s | %-34s |\n" record "idrig default" "idrig n4sid" "idrig oe" "Octave n4sid" "best over n = 1..8: n4sid / oe / Octave"
-echo "|---|---|---|---|---|---|"
+printf "| %-13s | %-24s | %s | %s | %s | %s | %s | %s |\n" record "idrig default" "n4sid" "n4sid D" "oe" "oe nk=0" "Octave n4sid" \
+  "best over n = 1..8: n4sid D / oe nk=0 / Octave"
+echo "|---|---|---|---|---|---|---|---|"
 while read -r name order fit_default nu; do
   cat "$dir/real_idrig_$name.txt" "$dir/real_octave_$name.txt" 2>/dev/null | awk -v name="$name" -v n="$order" '
-    $2 == "default" { def = $4; meth = "" }
+    $2 == "default" { def = $4; meth = $5 }
     { key = $2 " " $3; v[key] = $4 }
     $2 != "default" && $4 != "nan" && $4 != "-nan" { if (!($2 in best) || $4 + 0 > best[$2] + 0) { best[$2] = $4; bn[$2] = $3 } }
     END {
-      printf "| %-13s | %5.1f %% (n = %d)    | %5.1f %%       | %5.1f %%    | %5.1f %%          | %.1f (n=%d) / %.1f (n=%d) / %.1f (n=%d) |\n",
-        name, def, n, v["n4sid " n], v["oe " n], v["octave " n], best["n4sid"], bn["n4sid"], best["oe"], bn["oe"], best["octave"], bn["octave"]
+      printf "| %-13s | %5.1f %% (%s, n = %d) | %5.1f | %5.1f | %5.1f | %5.1f | %5.1f | %.1f (n=%d) / %.1f (n=%d) / %.1f (n=%d) |\n",
+        name, def, meth, n, v["n4sid " n], v["n4sid_D " n], v["oe " n], v["oe_nk0 " n], v["octave " n],
+        best["n4sid_D"], bn["n4sid_D"], best["oe_nk0"], bn["oe_nk0"], best["octave"], bn["octave"]
     }'
 done < "$dir/real_list.txt"

@@ -8,26 +8,10 @@
 #include <random>
 
 #include "tests/unit/numeric/seed001_plant.h"
+#include "tests/unit/numeric/time_domain/identification_test_util.h"
 
 namespace idrig {
 namespace {
-
-Eigen::MatrixXd RandomBinary(int samples, int inputs, int hold, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::bernoulli_distribution coin(0.5);
-  Eigen::MatrixXd u(samples, inputs);
-  for (int q = 0; q < inputs; ++q)
-    for (int k = 0; k < samples; ++k) u(k, q) = (k % hold == 0) ? (coin(rng) ? 1.0 : -1.0) : u(k - 1, q);
-  return u;
-}
-
-Eigen::VectorXd Noise(int samples, double sigma, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal(0.0, sigma);
-  Eigen::VectorXd e(samples);
-  for (int k = 0; k < samples; ++k) e(k) = normal(rng);
-  return e;
-}
 
 Eigen::VectorXd Shift(const Eigen::VectorXd& x, int k) {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(x.size());
@@ -40,7 +24,7 @@ Eigen::Vector3d TrueF() { return Eigen::Vector3d(1.0, -1.2, 0.72); }
 Eigen::Vector2d TrueB() { return Eigen::Vector2d(0.5, 0.3); }
 
 TEST(Pem, OutputErrorIsExactOnNoiseFreeData) {
-  const Eigen::MatrixXd u = RandomBinary(600, 1, 2, 1);
+  const Eigen::MatrixXd u = testing::RandomBinary(600, 1, 2, 1);
   const Eigen::VectorXd y = FilterPolynomial(TrueB(), TrueF(), Shift(u.col(0), 1));
   PemOptions options;
   options.order = 2;
@@ -57,7 +41,7 @@ TEST(Pem, OutputErrorIsExactOnNoiseFreeData) {
 }
 
 TEST(Pem, MisoOutputErrorSeparatesTheInputs) {
-  const Eigen::MatrixXd u = RandomBinary(800, 2, 1, 2);
+  const Eigen::MatrixXd u = testing::RandomBinary(800, 2, 1, 2);
   const Eigen::VectorXd y = FilterPolynomial(TrueB(), TrueF(), Shift(u.col(0), 1)) +
                             FilterPolynomial(Eigen::Vector2d(-1.0, 0.2), Eigen::Vector3d(1.0, -0.8, 0.15), Shift(u.col(1), 1));
   PemOptions options;
@@ -79,8 +63,8 @@ TEST(Pem, ReportedStandardErrorsMatchTheMonteCarloSpread) {
   double reported = 0.0;
   constexpr int kSeeds = 30;
   for (int s = 0; s < kSeeds; ++s) {
-    const Eigen::MatrixXd u = RandomBinary(600, 1, 4, 100 + s);
-    const Eigen::VectorXd y = Simulate(plant, u, 0.2).col(0) + Noise(600, 0.05, 200 + s);
+    const Eigen::MatrixXd u = testing::RandomBinary(600, 1, 4, 100 + s);
+    const Eigen::VectorXd y = Simulate(plant, u, 0.2).col(0) + testing::WhiteNoise(600, 0.05, 200 + s);
     PemOptions options;
     options.order = 3;
     const PemResult r = IdentifyPem(MakeIoRecord(u, y, 0.2), options);
@@ -100,8 +84,8 @@ TEST(Pem, ReportedStandardErrorsMatchTheMonteCarloSpread) {
 
 TEST(Pem, ArmaxAndBoxJenkinsRecoverTheirNoiseModels) {
   const int n = 4000;
-  const Eigen::MatrixXd u = RandomBinary(n, 1, 2, 3);
-  const Eigen::VectorXd e = Noise(n, 0.1, 4);
+  const Eigen::MatrixXd u = testing::RandomBinary(n, 1, 2, 3);
+  const Eigen::VectorXd e = testing::WhiteNoise(n, 0.1, 4);
   const Eigen::Vector2d c_true(1.0, 0.7), d_true(1.0, -0.9);
   // ARMAX: A y = B u + C e with A = F of the OE test.
   const Eigen::VectorXd y_armax = FilterPolynomial(TrueB(), TrueF(), Shift(u.col(0), 1)) +
@@ -134,8 +118,8 @@ TEST(Pem, ArmaxAndBoxJenkinsRecoverTheirNoiseModels) {
 
 TEST(Pem, OrderIsChosenOnHeldOutData) {
   const StateSpace plant = DiscretizeZoh(ToStateSpace(testing::PlantTf()), 0.2);
-  const Eigen::MatrixXd u = RandomBinary(2000, 1, 4, 9);
-  const Eigen::VectorXd y = Simulate(plant, u, 0.2).col(0) + Noise(2000, 0.01, 10);
+  const Eigen::MatrixXd u = testing::RandomBinary(2000, 1, 4, 9);
+  const Eigen::VectorXd y = Simulate(plant, u, 0.2).col(0) + testing::WhiteNoise(2000, 0.01, 10);
   PemOptions options;
   options.max_order = 6;
   const PemResult r = IdentifyPem(MakeIoRecord(u, y, 0.2), options);
@@ -146,15 +130,10 @@ TEST(Pem, OrderIsChosenOnHeldOutData) {
 }
 
 TEST(Pem, BadInputIsRejectedWithAMessage) {
-  const Eigen::MatrixXd u = RandomBinary(300, 2, 1, 5);
+  const Eigen::MatrixXd u = testing::RandomBinary(300, 2, 1, 5);
   const Eigen::VectorXd y = u.col(0) + u.col(1);
-  auto message_of = [](const IoRecord& record, const PemOptions& options) -> std::string {
-    try {
-      IdentifyPem(record, options);
-    } catch (const std::invalid_argument& e) {
-      return e.what();
-    }
-    return "";
+  auto message_of = [](const IoRecord& record, const PemOptions& options) {
+    return testing::InvalidArgumentMessage([&] { IdentifyPem(record, options); });
   };
   PemOptions two;
   two.order = 2;

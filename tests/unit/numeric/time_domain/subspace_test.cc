@@ -7,6 +7,7 @@
 #include <random>
 
 #include "tests/unit/numeric/seed001_plant.h"
+#include "tests/unit/numeric/time_domain/identification_test_util.h"
 
 namespace idrig {
 namespace {
@@ -26,15 +27,6 @@ StateSpace TrueMimo() {
   return s;
 }
 
-Eigen::MatrixXd RandomBinary(int samples, int inputs, int hold, std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  std::bernoulli_distribution coin(0.5);
-  Eigen::MatrixXd u(samples, inputs);
-  for (int q = 0; q < inputs; ++q)
-    for (int k = 0; k < samples; ++k) u(k, q) = (k % hold == 0) ? (coin(rng) ? 1.0 : -1.0) : u(k - 1, q);
-  return u;
-}
-
 // Sorted-by-matching distance between two pole sets.
 double PoleError(const Eigen::VectorXcd& truth, const Eigen::VectorXcd& est) {
   return std::max(testing::MaxPoleDistance(truth, est), testing::MaxPoleDistance(est, truth));
@@ -42,7 +34,7 @@ double PoleError(const Eigen::VectorXcd& truth, const Eigen::VectorXcd& est) {
 
 TEST(Subspace, RecoversANoiseFreeMimoSystemWithEveryWeighting) {
   const StateSpace truth = TrueMimo();
-  const Eigen::MatrixXd u = RandomBinary(2000, 2, 1, 7);
+  const Eigen::MatrixXd u = testing::RandomBinary(2000, 2, 1, 7);
   Eigen::VectorXd x0(4);
   x0 << 1, -1, 0.5, 2;
   const Eigen::MatrixXd y = SimulateFrom(truth, u, x0);
@@ -71,7 +63,7 @@ TEST(Subspace, RecoversANoiseFreeMimoSystemWithEveryWeighting) {
 TEST(Subspace, FeedthroughIsEstimatedWhenAsked) {
   StateSpace truth = TrueMimo();
   truth.D << 0.3, 0, -0.2, 0.1;
-  const Eigen::MatrixXd u = RandomBinary(1500, 2, 1, 3);
+  const Eigen::MatrixXd u = testing::RandomBinary(1500, 2, 1, 3);
   const IoRecord record = MakeIoRecord(u, SimulateFrom(truth, u, Eigen::VectorXd::Zero(4)), 0.1);
   SubspaceOptions options;
   options.order = 4;
@@ -86,7 +78,7 @@ TEST(Subspace, FeedthroughIsEstimatedWhenAsked) {
 TEST(Subspace, Seed001PlantUnderNoiseHasOrderThreeAndItsPoles) {
   const TransferFunction plant = testing::PlantTf();
   const StateSpace discrete = DiscretizeZoh(ToStateSpace(plant), 0.2);
-  const Eigen::MatrixXd u = RandomBinary(2000, 1, 4, 11);
+  const Eigen::MatrixXd u = testing::RandomBinary(2000, 1, 4, 11);
   Eigen::MatrixXd y = SimulateFrom(discrete, u, Eigen::VectorXd::Zero(3));
   std::mt19937_64 rng(5);
   std::normal_distribution<double> noise(0.0, 0.01);
@@ -110,7 +102,7 @@ TEST(Subspace, StabilityIsEnforcedOnRequest) {
   s.C = Eigen::MatrixXd::Constant(1, 1, 1.0);
   s.D = Eigen::MatrixXd::Zero(1, 1);
   s.sample_time = 1.0;
-  const Eigen::MatrixXd u = RandomBinary(300, 1, 1, 2);
+  const Eigen::MatrixXd u = testing::RandomBinary(300, 1, 1, 2);
   const IoRecord record = MakeIoRecord(u, SimulateFrom(s, u, Eigen::VectorXd::Zero(1)), 1.0);
   SubspaceOptions options;
   options.order = 1;
@@ -126,15 +118,10 @@ TEST(Subspace, StabilityIsEnforcedOnRequest) {
 }
 
 TEST(Subspace, BadInputIsRejectedWithAMessage) {
-  const Eigen::MatrixXd u = RandomBinary(200, 2, 1, 1);
+  const Eigen::MatrixXd u = testing::RandomBinary(200, 2, 1, 1);
   const Eigen::MatrixXd y = SimulateFrom(TrueMimo(), u, Eigen::VectorXd::Zero(4));
-  auto message_of = [](const IoRecord& record, const SubspaceOptions& options) -> std::string {
-    try {
-      IdentifySubspace(record, options);
-    } catch (const std::invalid_argument& e) {
-      return e.what();
-    }
-    return "";
+  auto message_of = [](const IoRecord& record, const SubspaceOptions& options) {
+    return testing::InvalidArgumentMessage([&] { IdentifySubspace(record, options); });
   };
   // Too few samples for the block rows: i = 20 with 4 channels needs N >= 200.
   SubspaceOptions twenty;
