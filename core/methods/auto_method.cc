@@ -35,8 +35,17 @@ struct Candidate {
 };
 
 MethodReport RunAuto(const MethodInput& input, const json& o) {
-  CheckOptionKeys(o, {"order", "max_order", "candidates", "tolerance"}, "auto");
-  const IoRecord& record = *input.record;
+  CheckOptionKeys(o, {"order", "max_order", "candidates", "tolerance", "screen_samples"}, "auto");
+  const IoRecord& full_record = *input.record;
+  // Long records are screened on their first `screen_samples` samples (the same 2/3 : 1/3
+  // split of that window); the winner is refitted on the whole record.
+  int screen = 15000;
+  if (o.contains("screen_samples")) {
+    if (!o["screen_samples"].is_number_integer() || o["screen_samples"].get<int>() < 30)
+      throw std::invalid_argument("auto: option 'screen_samples' must be an integer >= 30");
+    screen = o["screen_samples"].get<int>();
+  }
+  const IoRecord record = full_record.NumSamples() > screen ? Slice(full_record, 0, screen) : full_record;
   const bool siso = record.NumInputs() == 1 && record.NumOutputs() == 1;
   // Each method with and without a direct (same-sample) input term: real records often have
   // one (a fast sensor, a sampling skew), a sampled plant under a zero-order hold has none.
@@ -118,13 +127,15 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
   const Candidate* chosen = nullptr;
   for (const auto& c : table)  // ordered by order, then by preference
     if (std::isfinite(c.fit) && 1.0 - c.fit / 100.0 <= (1.0 + tolerance) * best_nrmse + 1e-12) { chosen = &c; break; }
-  MethodReport report = RunMethod(chosen->method, record, chosen->options);
+  MethodReport report = RunMethod(chosen->method, full_record, chosen->options);
   json selection;
   json rows = json::array();
   for (const auto& c : table)
     rows.push_back({{"candidate", c.label}, {"method", c.method}, {"options", c.options}, {"order", c.order},
                     {"validation_fit_percent", std::isfinite(c.fit) ? json(c.fit) : json(nullptr)}, {"note", c.note}});
   std::ostringstream rule;
+  if (record.NumSamples() < full_record.NumSamples())
+    rule << "screened on the first " << record.NumSamples() << " of " << full_record.NumSamples() << " samples: ";
   rule << "estimated on samples 0.." << split - 1 << ", scored on " << split << ".." << samples - 1
        << " (simulation from rest); the smallest order within " << 100 * tolerance
        << " % of the best NRMSE, then the first method in the list (" ;

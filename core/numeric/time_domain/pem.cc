@@ -266,13 +266,20 @@ Eigen::VectorXd FilterPolynomial(const Eigen::VectorXd& num, const Eigen::Vector
   const int nn = static_cast<int>(num.size()), nd = static_cast<int>(den.size());
   Eigen::VectorXd y(n);
   const double* xp = x.data();
+  const double* bp = num.data();
+  const double* ap = den.data();
   double* yp = y.data();
-  for (long t = 0; t < n; ++t) {
+  const long warm = std::min<long>(n, std::max(nn, nd));
+  for (long t = 0; t < warm; ++t) {  // the first samples: fewer past values
     double acc = 0.0;
-    const int kn = static_cast<int>(std::min<long>(nn - 1, t));
-    for (int k = 0; k <= kn; ++k) acc += num(k) * xp[t - k];
-    const int kd = static_cast<int>(std::min<long>(nd - 1, t));
-    for (int k = 1; k <= kd; ++k) acc -= den(k) * yp[t - k];
+    for (int k = 0; k < nn && k <= t; ++k) acc += bp[k] * xp[t - k];
+    for (int k = 1; k < nd && k <= t; ++k) acc -= ap[k] * yp[t - k];
+    yp[t] = acc;
+  }
+  for (long t = warm; t < n; ++t) {
+    double acc = 0.0;
+    for (int k = 0; k < nn; ++k) acc += bp[k] * xp[t - k];
+    for (int k = 1; k < nd; ++k) acc -= ap[k] * yp[t - k];
     yp[t] = acc;
   }
   return y;

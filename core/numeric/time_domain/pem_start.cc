@@ -47,6 +47,18 @@ Eigen::VectorXd StabilisedMonic(const Eigen::VectorXd& monic, int degree) {
 }
 
 Eigen::VectorXd LeastSquares(const Eigen::MatrixXd& phi, const Eigen::VectorXd& y) {
+  // Starting values only: normal equations on equilibrated columns (O(N p²), no N×p QR), with
+  // a QR fallback when they are too ill-conditioned.
+  const int p = static_cast<int>(phi.cols());
+  if (p == 0) return Eigen::VectorXd();
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(p, p);
+  gram.selfadjointView<Eigen::Lower>().rankUpdate(phi.transpose());
+  gram.triangularView<Eigen::StrictlyUpper>() = gram.transpose();
+  const Eigen::VectorXd scale = gram.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd scaled = scale.asDiagonal() * gram * scale.asDiagonal();
+  Eigen::LDLT<Eigen::MatrixXd> ldlt(scaled);
+  if (ldlt.info() == Eigen::Success && ldlt.rcond() > 1e-10)
+    return scale.asDiagonal() * ldlt.solve(scale.asDiagonal() * (phi.transpose() * y));
   return phi.colPivHouseholderQr().solve(y);
 }
 
