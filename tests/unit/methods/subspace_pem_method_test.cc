@@ -1,7 +1,11 @@
 // n4sid, oe, armax, bj and auto through the method registry, as the workers run them.
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <random>
+#include <sstream>
+
+#include "core/numeric/validation.h"
 
 #include "core/io/model_json.h"
 #include "core/methods/registry.h"
@@ -49,6 +53,43 @@ TEST(SubspacePemMethods, AutoChoosesTheThirdOrderPlantAndSaysWhy) {
   EXPECT_EQ(r.json.at("selection").at("candidates").size(), 30u);  // 5 candidates x orders 1..6
   EXPECT_NE(r.text.find("chosen: "), std::string::npos);
   EXPECT_THROW(RunMethod("auto", Seed001Record(2000, 0.01, 2), {{"candidates", {"nope"}}}), std::invalid_argument);
+}
+
+// A DaISy record (whitespace-separated columns), the first `nu` columns inputs, means of the
+// first half removed; empty when ../shared/data is absent.
+IoRecord Daisy(const std::string& file, int nu, double ts) {
+  std::ifstream in(std::string(IDRIG_SHARED_DIR) + "/data/daisy/" + file);
+  std::vector<std::vector<double>> rows;
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream fields(line);
+    std::vector<double> row;
+    for (double v; fields >> v;) row.push_back(v);
+    if (!row.empty()) rows.push_back(row);
+  }
+  if (rows.empty()) return {};
+  Eigen::MatrixXd all(rows.size(), rows[0].size());
+  for (size_t r = 0; r < rows.size(); ++r)
+    for (size_t c = 0; c < rows[0].size(); ++c) all(r, c) = rows[r][c];
+  const Eigen::RowVectorXd mean = all.topRows(all.rows() / 2).colwise().mean();
+  all.rowwise() -= mean;
+  return MakeIoRecord(all.leftCols(nu), all.rightCols(all.cols() - nu), ts);
+}
+
+TEST(SubspacePemMethods, MimoDaisyRecordsGetAFitPerOutput) {
+  const IoRecord cd = Daisy("CD_player_arm.dat", 2, 1.0), winding = Daisy("winding.dat", 5, 0.1);
+  if (cd.NumSamples() == 0 || winding.NumSamples() == 0) GTEST_SKIP() << "../shared/data/daisy not found";
+  for (const IoRecord* record : {&cd, &winding}) {
+    const int half = record->NumSamples() / 2;
+    const MethodReport r = RunMethod("n4sid", Slice(*record, 0, half), {{"order", 5}, {"feedthrough", true}});
+    ASSERT_EQ(r.json.at("details").at("fit_percent_per_output").size(), static_cast<size_t>(record->NumOutputs()));
+    const Eigen::MatrixXd sim = Simulate(ModelFromJson(r.json.at("model")), record->u, record->sample_time);
+    const Eigen::VectorXd fit = FitPercent(record->y.bottomRows(record->NumSamples() - half),
+                                           sim.bottomRows(record->NumSamples() - half));
+    // Octave 7.3's n4sid (SLICOT) at order 5 on the same split: 69.7 % (CD player arm) and
+    // 54.3 % (winding), mean over outputs (docs/subspace_pem.md); idrig within 3 points or above.
+    const double octave = record == &cd ? 69.7 : 54.3;
+    EXPECT_GT(fit.mean(), octave - 3.0) << (record == &cd ? "CD_player_arm" : "winding") << " fit " << fit.mean();
+  }
 }
 
 }  // namespace
