@@ -268,10 +268,7 @@ SubspaceResult IdentifySubspace(const IoRecord& record, const SubspaceOptions& o
   const int i_min = (n_max + ny - 1) / ny + 1;  // (i−1)·ny >= n for the shift of Γ_i
   int i = options.block_rows;
   if (i == 0) {
-    // A given order: i = min(2n, n + 10) as SLICOT's IB01 drivers (Octave's n4sid) do; the
-    // order to be chosen: room for the singular values up to max_order.
-    i = options.order > 0 ? std::max(i_min, std::min(2 * n_max, n_max + 10))
-                          : std::max(10, (3 * (n_max + 1) + 2 * ny - 1) / (2 * ny));
+    i = std::max(10, (3 * (n_max + 1) + 2 * ny - 1) / (2 * ny));
     while (i > i_min && !fits(i)) --i;
   }
   if (i < i_min)

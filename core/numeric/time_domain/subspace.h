@@ -39,8 +39,7 @@ SubspaceWeighting ParseSubspaceWeighting(const std::string& name);
 struct SubspaceOptions {
   int order = 0;             // n; 0: from the largest gap of the singular values, n <= max_order
   int max_order = 10;
-  int block_rows = 0;        // i (past and future horizons); 0: min(2n, n+10) for a given order
-                             // (as SLICOT/Octave), else max(10, ⌈1.5(max_order+1)/ny⌉)
+  int block_rows = 0;        // i (past and future horizons); 0: max(10, ⌈1.5(max_order+1)/ny⌉)
   SubspaceWeighting weighting = SubspaceWeighting::kCva;
   bool feedthrough = false;  // estimate D; false: D = 0
   bool enforce_stability = false;  // reflect eigenvalues of A outside the unit circle
