@@ -13,6 +13,7 @@ std::vector<MethodInfo> FiniteFrequencyMethods();  // finite_frequency_method.cc
 std::vector<MethodInfo> StepModalMethods();        // step_modal_method.cc
 std::vector<MethodInfo> FrequencyMethods();        // frequency_method.cc
 std::vector<MethodInfo> GapMethods();              // gap_method.cc
+std::vector<MethodInfo> SubspacePemMethods();      // subspace_pem_method.cc (n4sid, oe, armax, bj, auto)
 
 const std::vector<MethodInfo>& Methods() {
   static const std::vector<MethodInfo> methods = [] {
@@ -22,6 +23,7 @@ const std::vector<MethodInfo>& Methods() {
       auto some = family();
       all.insert(all.end(), some.begin(), some.end());
     }
+    for (auto& m : SubspacePemMethods()) all.push_back(std::move(m));
     return all;
   }();
   return methods;

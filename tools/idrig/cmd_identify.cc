@@ -52,7 +52,7 @@ nlohmann::json ParseFrequencies(const std::string& text) {
 
 void RegisterIdentifyCommand(CLI::App& app) {
   struct Args {
-    std::string data, method = "arx", options_json, frequencies, u_names, y_names;
+    std::string data, method = "auto", options_json, frequencies, u_names, y_names;
     int order = 0;
     double ts = 0.0;
     std::vector<std::string> options;
@@ -66,7 +66,7 @@ void RegisterIdentifyCommand(CLI::App& app) {
   cmd->add_option("--u", args->u_names, ".mat files: the input variable(s), comma-separated");
   cmd->add_option("--y", args->y_names, ".mat files: the output variable(s), comma-separated");
   cmd->add_option("--ts", args->ts, ".mat files: sample time [s] (default: the file's Ts, or its time vector t)");
-  cmd->add_option("--method", args->method, methods_help);
+  cmd->add_option("--method", args->method, methods_help + "\n(default: auto)");
   cmd->add_option("--order", args->order, "model order (0 or absent: chosen automatically)");
   cmd->add_option("--option", args->options, "method option key=value (value is JSON or a word); repeatable");
   cmd->add_option("--options-json", args->options_json, "method options as one JSON object");

@@ -1,0 +1,182 @@
+// `auto`: the default of `idrig identify`. Every applicable method (SISO: oe, n4sid, arx-oe;
+// MIMO: n4sid, oe per output), each also with a direct input term (oe with input_delay 0,
+// n4sid with D), at every order 1..max_order is estimated on the first two thirds of the
+// record; each model simulates the whole record from rest and is scored on the last third
+// (mean simulation fit over the outputs). The choice is the smallest order whose NRMSE is
+// within 2 % of the best; among candidates at that order, the first in the list (oe first:
+// under white output noise it is the maximum-likelihood estimate). The winner is refitted on
+// the whole record and its report returned, with the table of candidates.
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+#include "core/io/model_json.h"
+#include "core/methods/subspace_pem_method.h"
+#include "core/numeric/validation.h"
+
+namespace idrig {
+namespace {
+
+using nlohmann::json;
+
+// A method with fixed options: e.g. "oe nk=0" is oe with input_delay 0 (a direct term b0).
+struct Variant {
+  std::string label, method;
+  json options;
+};
+
+struct Candidate {
+  std::string label, method;
+  json options;
+  int order = 0;
+  double fit = -std::numeric_limits<double>::infinity();  // mean validation fit [%]
+  std::string note;                                      // why it was not scored
+};
+
+MethodReport RunAuto(const MethodInput& input, const json& o) {
+  CheckOptionKeys(o, {"order", "max_order", "candidates", "tolerance", "screen_samples"}, "auto");
+  const IoRecord& full_record = *input.record;
+  // Long records are screened on their first `screen_samples` samples (the same 2/3 : 1/3
+  // split of that window); the winner is refitted on the whole record.
+  int screen = 15000;
+  if (o.contains("screen_samples")) {
+    if (!o["screen_samples"].is_number_integer() || o["screen_samples"].get<int>() < 30)
+      throw std::invalid_argument("auto: option 'screen_samples' must be an integer >= 30");
+    screen = o["screen_samples"].get<int>();
+  }
+  const IoRecord record = full_record.NumSamples() > screen ? Slice(full_record, 0, screen) : full_record;
+  const bool siso = record.NumInputs() == 1 && record.NumOutputs() == 1;
+  // Each method with and without a direct (same-sample) input term: real records often have
+  // one (a fast sensor, a sampling skew), a sampled plant under a zero-order hold has none.
+  const json direct_oe = {{"input_delay", 0}}, direct_n4sid = {{"feedthrough", true}};
+  std::vector<Variant> variants =
+      siso ? std::vector<Variant>{{"oe", "oe", json::object()}, {"n4sid", "n4sid", json::object()},
+                                  {"arx-oe", "arx-oe", json::object()}, {"oe nk=0", "oe", direct_oe},
+                                  {"n4sid D", "n4sid", direct_n4sid}}
+           : std::vector<Variant>{{"n4sid", "n4sid", json::object()}, {"oe", "oe", json::object()},
+                                  {"n4sid D", "n4sid", direct_n4sid}, {"oe nk=0", "oe", direct_oe}};
+  if (o.contains("candidates")) {
+    if (!o["candidates"].is_array() || o["candidates"].empty())
+      throw std::invalid_argument("auto: option 'candidates' must be a non-empty list of method names");
+    variants.clear();
+    for (const auto& m : o["candidates"]) {
+      if (!m.is_string()) throw std::invalid_argument("auto: option 'candidates' must list method names");
+      FindMethod(m.get<std::string>());
+      variants.push_back({m.get<std::string>(), m.get<std::string>(), json::object()});
+    }
+  }
+  int max_order = 6, only_order = 0;
+  if (o.contains("max_order")) {
+    if (!o["max_order"].is_number_integer() || o["max_order"].get<int>() < 1)
+      throw std::invalid_argument("auto: option 'max_order' must be an integer >= 1");
+    max_order = o["max_order"].get<int>();
+  }
+  if (o.contains("order")) {
+    if (!o["order"].is_number_integer() || o["order"].get<int>() < 0)
+      throw std::invalid_argument("auto: option 'order' must be an integer >= 1");
+    only_order = o["order"].get<int>();
+  }
+  double tolerance = 0.02;
+  if (o.contains("tolerance")) {
+    if (!o["tolerance"].is_number() || o["tolerance"].get<double>() < 0)
+      throw std::invalid_argument("auto: option 'tolerance' must be a number >= 0 (relative NRMSE)");
+    tolerance = o["tolerance"].get<double>();
+  }
+  const int samples = record.NumSamples();
+  const int split = samples - samples / 3;
+  if (samples / 3 < 10)
+    throw std::invalid_argument("auto: the record has " + std::to_string(samples) +
+                                " samples; choosing a model on held-out data needs at least 30");
+  const IoRecord head = Slice(record, 0, split);
+  std::vector<Candidate> table;
+  for (int n = only_order > 0 ? only_order : 1; n <= (only_order > 0 ? only_order : max_order); ++n) {
+    for (const auto& v : variants) {
+      Candidate c;
+      c.label = v.label;
+      c.method = v.method;
+      c.options = v.options;
+      c.options["order"] = n;
+      c.order = n;
+      try {
+        const MethodReport r = RunMethod(v.method, head, c.options);
+        const std::string status = r.json.value("status", "failed");
+        if (status == "failed") {
+          c.note = "status failed: " + r.json.value("message", "");
+        } else {
+          const LtiModel model = ModelFromJson(r.json.at("model"));
+          const Eigen::MatrixXd sim = Simulate(model, record.u, record.sample_time);
+          const Eigen::VectorXd fit = FitPercent(record.y.bottomRows(samples - split), sim.bottomRows(samples - split));
+          c.fit = fit.allFinite() ? fit.mean() : -std::numeric_limits<double>::infinity();
+          if (status != "ok") c.note = "status " + status;
+        }
+      } catch (const std::exception& e) {
+        c.note = e.what();
+      }
+      table.push_back(c);
+    }
+  }
+  double best = -std::numeric_limits<double>::infinity();
+  for (const auto& c : table) best = std::max(best, c.fit);
+  if (!std::isfinite(best)) {
+    std::string why;
+    for (const auto& c : table) why += "\n  " + c.label + " n=" + std::to_string(c.order) + ": " + c.note;
+    throw std::invalid_argument("auto: no candidate method gave a usable model on the record:" + why);
+  }
+  const double best_nrmse = 1.0 - best / 100.0;
+  const Candidate* chosen = nullptr;
+  for (const auto& c : table)  // ordered by order, then by preference
+    if (std::isfinite(c.fit) && 1.0 - c.fit / 100.0 <= (1.0 + tolerance) * best_nrmse + 1e-12) { chosen = &c; break; }
+  MethodReport report = RunMethod(chosen->method, full_record, chosen->options);
+  json selection;
+  json rows = json::array();
+  for (const auto& c : table)
+    rows.push_back({{"candidate", c.label}, {"method", c.method}, {"options", c.options}, {"order", c.order},
+                    {"validation_fit_percent", std::isfinite(c.fit) ? json(c.fit) : json(nullptr)}, {"note", c.note}});
+  std::ostringstream rule;
+  if (record.NumSamples() < full_record.NumSamples())
+    rule << "screened on the first " << record.NumSamples() << " of " << full_record.NumSamples() << " samples: ";
+  rule << "estimated on samples 0.." << split - 1 << ", scored on " << split << ".." << samples - 1
+       << " (simulation from rest); the smallest order within " << 100 * tolerance
+       << " % of the best NRMSE, then the first method in the list (" ;
+  for (size_t k = 0; k < variants.size(); ++k) rule << (k ? ", " : "") << variants[k].label;
+  rule << ")";
+  selection["candidates"] = rows;
+  selection["rule"] = rule.str();
+  selection["chosen"] = {{"candidate", chosen->label}, {"method", chosen->method}, {"options", chosen->options},
+                         {"order", chosen->order}, {"validation_fit_percent", chosen->fit}};
+  selection["best_validation_fit_percent"] = best;
+  report.json["chosen_method"] = chosen->method;
+  report.json["selection"] = selection;
+  std::ostringstream t;
+  t << std::setprecision(4) << std::fixed;
+  t << "Method and order chosen on held-out data: " << rule.str() << "\n\n  order";
+  for (const auto& v : variants) t << std::setw(12) << v.label;
+  t << "   (fit % on the last third)\n";
+  for (size_t k = 0; k < table.size(); k += variants.size()) {
+    t << "  " << std::setw(5) << table[k].order;
+    for (size_t i = 0; i < variants.size(); ++i) {
+      const Candidate& c = table[k + i];
+      std::ostringstream cell;
+      cell << std::setprecision(2) << std::fixed;
+      if (std::isfinite(c.fit)) cell << c.fit; else cell << "-";
+      t << std::setw(11) << cell.str() << (&c == chosen ? "*" : " ");
+    }
+    t << "\n";
+  }
+  t << "\nchosen: " << chosen->label << " order " << chosen->order << " (validation fit " << chosen->fit
+    << " %, best " << best << " %); refitted on the whole record:\n\n";
+  report.text = t.str() + report.text;
+  return report;
+}
+
+}  // namespace
+
+MethodInfo AutoMethod() {
+  return {"auto",
+          "default: every applicable method and order estimated on 2/3 of the record, chosen by fit on the last "
+          "third, refitted on all of it",
+          true, [](const MethodInput& in, const json& o) { return RunAuto(in, o); }};
+}
+
+}  // namespace idrig
