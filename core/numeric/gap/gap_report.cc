@@ -413,9 +413,18 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
           "mismatch; excite at several amplitudes to separate them");
     }
   }
-  // A second effect, by forward selection (effect_pairs.cc).
-  if (v.effect != "ambiguous" && top.eligible && !top.effects.empty() && options.second_effect)
-    SelectSecondEffect(ctx, work.front(), kinds, report);
+  // A second effect, by forward selection (effect_pairs.cc), from the best eligible effect —
+  // also when parameter_mismatch tops the ranking: two effects together can leave a linear
+  // refit as the best single explanation.
+  if (v.effect != "ambiguous" && top.effect.kind != EffectKind::kNone && options.second_effect) {
+    const CandidateWork* first = nullptr;
+    for (const CandidateWork& w : work)
+      if (w.fit.eligible && !w.fit.effects.empty()) {
+        first = &w;
+        break;
+      }
+    if (first) SelectSecondEffect(ctx, *first, top.bic, kinds, report);
+  }
   const double explainable = v.nrmse_before - noise_nrmse;
   v.shrink = explainable > 0 ? (v.nrmse_before - v.nrmse_after) / explainable : 0.0;
   if (v.effect == "none")
