@@ -208,6 +208,11 @@ std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const
 void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
                         const std::vector<EffectKind>& kinds, GapReport& report);
 
+// linear_order.cc: a linear model of order n0 + 2 against the best single candidate `top`; when
+// it wins, sets the verdict to unmodelled_dynamics (plant = *higher) and returns true.
+bool TestUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, GapReport& report,
+                            TransferFunction* higher);
+
 // body(i) for i < count on up to `threads` threads (0: hardware); an exception is rethrown as
 // std::invalid_argument naming what(i).
 void ParallelFor(size_t count, int threads, const std::function<void(size_t)>& body,
