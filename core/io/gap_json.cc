@@ -80,6 +80,25 @@ nlohmann::json GapReportToJson(const GapReport& report) {
       {"explanation", v.explanation},
   };
   if (!v.tied.empty()) verdict["tied"] = v.tied;
+  nlohmann::json effects = nlohmann::json::array();
+  for (size_t i = 0; i < v.effects.size(); ++i)
+    effects.push_back({{"effect", EffectName(v.effects[i].kind)},
+                       {"params", Params(v.effects[i], i < v.effects_std.size() ? &v.effects_std[i] : nullptr)}});
+  verdict["effects"] = effects;
+  nlohmann::json output_offset = nlohmann::json::array();
+  for (double b : v.nuisance.output_offset) output_offset.push_back(Number(b));
+  verdict["nuisance"] = {
+      {"input_offset", v.nuisance.input_offset_fitted ? Number(v.nuisance.input_offset) : nlohmann::json()},
+      {"input_offset_std", v.nuisance.input_offset_fitted ? Number(v.nuisance.input_offset_std) : nlohmann::json()},
+      {"output_offset", output_offset},
+      {"initial_state", v.nuisance.initial_state},
+  };
+  verdict["fit_scheme"] = v.fit_scheme;
+  if (v.linear_order > 0) {
+    verdict["linear_order"] = v.linear_order;
+    verdict["linear_nrmse_after"] = v.linear_nrmse_after;
+  }
+  if (v.shooting_segment > 0) verdict["shooting_segment"] = v.shooting_segment;
 
   nlohmann::json ranking = nlohmann::json::array();
   for (const auto& c : report.ranking) {
@@ -159,6 +178,19 @@ std::string GapReportText(const nlohmann::json& report) {
     const auto& sd = v.at("params_std")[name];
     if (sd.is_number()) s << " ± " << sd.get<double>();
     s << "\n";
+  }
+  if (v.contains("effects") && v["effects"].size() > 1) {
+    const auto& second = v["effects"][1];
+    s << "  second effect: " << second.at("effect").get<std::string>() << "\n";
+    for (const auto& [name, value] : second.at("params").items())
+      s << "    " << name << " = " << value.at("value") << " ± " << value.at("std") << "\n";
+  }
+  if (v.contains("nuisance")) {
+    const auto& n = v["nuisance"];
+    s << "  nuisance: input offset " << n.at("input_offset") << ", output offset "
+      << (n.at("output_offset").empty() ? nlohmann::json() : n.at("output_offset")[0])
+      << ", initial state " << n.at("initial_state").get<std::string>() << "; fit "
+      << v.value("fit_scheme", "") << "\n";
   }
   s << "where: " << report.at("where").at("summary").get<std::string>() << "\n";
   s << "ranking (validation BIC; eligible = significant on estimation data and matching the gap):\n";

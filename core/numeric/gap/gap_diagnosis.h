@@ -46,6 +46,8 @@ struct GapOptions {
   int evaluations_polish = 80;      // LM budget for the best start, ×(parameters + 1)
   std::vector<EffectKind> candidates;  // empty: every effect of the library
   int threads = 0;               // candidates fitted in parallel; 0: one per hardware thread
+  bool second_effect = true;     // forward selection of a second effect after the first
+  bool check_linear_order = true;  // test a higher-order linear part (unmodelled_dynamics)
 };
 
 struct BandGap {
@@ -99,12 +101,31 @@ struct CandidateFit {
   double signature = 0;          // corr(ŷ_c − ŷ_0, y − ŷ_0) on validation data
   bool eligible = false;         // may be the verdict
   std::vector<double> param_std; // 1σ of effect parameters (linearised), NaN when unknown
+  std::vector<Effect> effects;   // every effect of the candidate (one, or two after selection)
+  std::vector<std::vector<double>> effects_std;  // their 1σ
+  double input_offset = 0, input_offset_std = 0;  // fitted actuator offset du (u units)
+  bool input_offset_fitted = false;
+  std::vector<double> output_offsets;             // per estimation record (first segment)
   int evaluations = 0;
   std::string note;
 };
 
+// Nuisance parameters every candidate carries (never named as an effect): an actuator offset
+// du (u → u + du; fitted where it is not an output offset in disguise), an output offset per
+// record (per segment) and a free initial state per record (per segment), the latter two by
+// variable projection.
+struct GapNuisance {
+  double input_offset = 0, input_offset_std = 0;
+  bool input_offset_fitted = false;
+  std::vector<double> output_offset;  // per estimation record
+  std::string initial_state;          // how the initial state was treated
+};
+
 struct GapVerdict {
-  std::string effect;            // an effect name, or "ambiguous"
+  // An effect name, "ambiguous", or "unmodelled_dynamics" (the linear part lacks dynamics: a
+  // higher-order linear model beats every single effect; `effects` then holds what a second
+  // diagnosis on that model finds, if any).
+  std::string effect;
   std::vector<std::string> tied; // the two candidates when ambiguous
   double confidence = 0;         // BIC weight of the verdict among all candidates
   double nrmse_before = 0, nrmse_after = 0;  // validation records
@@ -112,6 +133,13 @@ struct GapVerdict {
   Effect params;
   std::vector<double> param_std;
   TransferFunction plant;        // the adjusted linear part
+  std::vector<Effect> effects;   // one or two effects (the first is `params`); empty for none
+  std::vector<std::vector<double>> effects_std;
+  GapNuisance nuisance;
+  int linear_order = 0;          // unmodelled_dynamics: the order of the linear part that fits
+  double linear_nrmse_after = 0; // unmodelled_dynamics: validation NRMSE with that linear part
+  std::string fit_scheme;        // "single_shooting" or "multiple_shooting"
+  long shooting_segment = 0;     // samples per segment when multiple shooting
   std::string explanation;
 };
 

@@ -1,0 +1,487 @@
+// The gap diagnosis' entry point and report (see gap_diagnosis.h): input checks, the continuous
+// sim model, the data's scales, G0 and its refit, the candidates fitted in parallel
+// (candidate_fit.cc), ranked (ranking.cc), and the verdict. Localisation is gap_where.cc.
+#include <unsupported/Eigen/MatrixFunctions>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <stdexcept>
+#include <thread>
+
+#include "core/numeric/gap/gap_internal.h"
+#include "core/numeric/validation.h"
+
+namespace idrig {
+namespace gap_detail {
+
+[[noreturn]] void Fail(const std::string& message) {
+  throw std::invalid_argument("gap diagnosis: " + message);
+}
+
+double Quantile(std::vector<double> v, double p) {
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(p * (v.size() - 1)));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[k];
+}
+
+// Simulation over the scored samples of every record, concatenated.
+Eigen::VectorXd Stack(const std::vector<GapRecord>& records,
+                      const std::function<Eigen::VectorXd(const GapRecord&)>& f) {
+  long total = 0;
+  for (const auto& r : records) total += r.u.size() - r.score_from;
+  Eigen::VectorXd out(total);
+  long offset = 0;
+  for (const auto& r : records) {
+    const long n = r.u.size() - r.score_from;
+    out.segment(offset, n) = f(r).tail(n);
+    offset += n;
+  }
+  return out;
+}
+
+}  // namespace gap_detail
+
+using namespace gap_detail;
+
+namespace {
+
+// ---------------------------------------------------------------------------------------------
+// Input checks and the continuous sim model.
+
+void CheckRecords(const std::vector<GapRecord>& records, const std::string& what, double ts,
+                  int min_samples) {
+  for (size_t r = 0; r < records.size(); ++r) {
+    const GapRecord& rec = records[r];
+    const std::string name = what + " record " + std::to_string(r + 1);
+    if (rec.u.size() != rec.y.size())
+      Fail(name + ": u has " + std::to_string(rec.u.size()) + " samples but y has " +
+           std::to_string(rec.y.size()));
+    for (long k = 0; k < rec.u.size(); ++k)
+      if (!std::isfinite(rec.u(k)) || !std::isfinite(rec.y(k)))
+        Fail(name + ": sample " + std::to_string(k + 1) + " is NaN or Inf");
+    if (rec.u.size() - rec.score_from < min_samples)
+      Fail(name + ": " + std::to_string(rec.u.size() - rec.score_from) +
+           " samples are too few for the sim model (need at least " + std::to_string(min_samples) +
+           ")");
+    if (std::abs(rec.sample_time - ts) > 1e-9 * ts)
+      Fail(name + ": sample time " + std::to_string(rec.sample_time) + " s differs from " +
+           std::to_string(ts) + " s of the first record");
+    if (rec.u.maxCoeff() - rec.u.minCoeff() <= 1e-12 * std::max(1.0, rec.u.cwiseAbs().maxCoeff()))
+      Fail(name + ": the input is constant, so it carries no information about the gap");
+  }
+}
+
+TransferFunction ContinuousSimModel(const TransferFunction& sim, double ts) {
+  Validate(sim);
+  if (sim.num.size() > sim.den.size()) Fail("the sim model is improper (num order > den order)");
+  if (!sim.IsDiscrete()) return Normalized(sim);
+  if (std::abs(sim.sample_time - ts) > 1e-9 * ts)
+    Fail("the sim model is discrete with Ts = " + std::to_string(sim.sample_time) +
+         " s but the data's sample time is " + std::to_string(ts) +
+         " s; give a continuous model or one sampled at the data's rate");
+  TransferFunction undelayed = sim;
+  undelayed.delay_s = 0;
+  const StateSpace d = ToStateSpace(undelayed);
+  const int n = d.Order();
+  const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(n, n);
+  const Eigen::VectorXcd poles = d.A.eigenvalues();
+  for (int i = 0; i < poles.size(); ++i)
+    if (std::abs(poles(i).imag()) < 1e-9 * std::max(1.0, std::abs(poles(i))) && poles(i).real() <= 1e-9)
+      Fail("the discrete sim model has a pole at z = " + std::to_string(poles(i).real()) +
+           " on the non-positive real axis, so it has no continuous equivalent; give a continuous "
+           "model (or identify one of lower order)");
+  if (std::abs((d.A - identity).determinant()) < 1e-12)
+    Fail("the discrete sim model has a pole at z = 1; give a continuous model");
+  StateSpace c = d;
+  c.A = d.A.log() / ts;
+  c.B = (d.A - identity).partialPivLu().solve(c.A * d.B);
+  c.sample_time = 0;
+  TransferFunction tf = Normalized(ToTransferFunction(c));
+  tf.delay_s = sim.delay_s;
+  return tf;
+}
+
+// Slowest time constant of the plant [s] (from its poles), for scaling lags and delays.
+double SlowTimeConstant(const TransferFunction& plant, double ts, double duration) {
+  double slow = 0;
+  const Eigen::VectorXcd p = Poles(plant);
+  for (int i = 0; i < p.size(); ++i)
+    if (std::abs(p(i)) > 1e-9) slow = std::max(slow, 1.0 / std::abs(p(i)));
+  if (slow == 0) slow = duration / 10;
+  return std::clamp(slow, 2 * ts, duration);
+}
+
+// Multiple shooting when G0 integrates or is lightly damped: the slowest mode decays by less
+// than e^-5 over the longest record, so an open-loop simulation from a wrong state (or with a
+// small input bias) drifts. Segments of max(N/8, 100·(n+1)) samples each get a free state;
+// a true integrator (a pole within 1e-6/Ts of 0) also gets an input offset in every candidate.
+void ChooseFitScheme(const TransferFunction& g0, const std::vector<GapRecord>& estimation, double ts,
+                     FitContext& ctx) {
+  long longest = 0;
+  for (const auto& r : estimation) longest = std::max<long>(longest, r.u.size() - r.score_from);
+  const Eigen::VectorXcd p = Poles(g0);
+  double slowest = INFINITY;
+  bool integrator = false;
+  for (int i = 0; i < p.size(); ++i) {
+    slowest = std::min(slowest, -p(i).real());
+    if (std::abs(p(i)) < 1e-6 / ts) integrator = true;
+  }
+  ctx.integrating = integrator;
+  ctx.nuisance = CandidateSpec{};
+  if (p.size() > 0 && slowest * longest * ts < 5.0)
+    ctx.nuisance.segment = std::max<long>(longest / 8, 100 * (g0.Order() + 1));
+  if (ctx.nuisance.segment >= longest) ctx.nuisance.segment = 0;
+}
+
+// A reference candidate (none, or the refitted G0) as fitted, for the ranking.
+CandidateWork ReferenceWork(const Candidate& cand, const FitOutcome& fit, const Eigen::VectorXd& y_val,
+                            const std::vector<GapRecord>& estimation) {
+  CandidateWork w;
+  CandidateFit& c = w.fit;
+  c.effect = cand.EffectOf(fit.x);
+  c.plant = cand.Plant(fit.x);
+  c.parameters = cand.Size();
+  c.estimation_mse = fit.mse;
+  c.evaluations = fit.evaluations;
+  c.input_offset = cand.InputOffset(fit.x);
+  c.input_offset_fitted = cand.NuisanceParams() > 0;
+  for (const GapRecord& r : estimation) {
+    Nuisance nu;
+    cand.Predict(fit.x, r, &nu);
+    c.output_offsets.push_back(nu.output_offset);
+  }
+  w.y_val = y_val;
+  w.x = fit.x;
+  w.spec = cand.spec();
+  return w;
+}
+
+}  // namespace
+
+void gap_detail::AdoptCandidate(const CandidateFit& c, GapVerdict& v) {
+  v.effects = c.effects;
+  v.effects_std = c.effects_std;
+  v.params = c.effects.empty() ? c.effect : c.effects.front();
+  v.param_std = c.effects_std.empty() ? c.param_std : c.effects_std.front();
+  v.plant = c.plant;
+  v.nrmse_after = c.nrmse_after;
+  v.nuisance.input_offset = c.input_offset;
+  v.nuisance.input_offset_std = c.input_offset_std;
+  v.nuisance.input_offset_fitted = c.input_offset_fitted;
+  v.nuisance.output_offset = c.output_offsets;
+}
+
+void gap_detail::ParallelFor(size_t count, int threads_wanted, const std::function<void(size_t)>& body,
+                 const std::function<std::string(size_t)>& what) {
+  const int threads = std::max(1, std::min<int>(static_cast<int>(count),
+                                                threads_wanted > 0 ? threads_wanted
+                                                                   : static_cast<int>(std::thread::hardware_concurrency())));
+  std::atomic<size_t> next{0};
+  std::vector<std::string> errors(count);
+  auto run = [&] {
+    for (size_t i = next++; i < count; i = next++) {
+      try {
+        body(i);
+      } catch (const std::exception& e) {
+        errors[i] = e.what();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(run);
+  run();
+  for (auto& t : pool) t.join();
+  for (size_t i = 0; i < count; ++i)
+    if (!errors[i].empty()) Fail(what(i) + " failed: " + errors[i]);
+}
+
+TransferFunction SimModelTransferFunction(const LtiModel& model) {
+  if (const auto* tf = std::get_if<TransferFunction>(&model)) return *tf;
+  const StateSpace& ss = std::get<StateSpace>(model);
+  if (ss.NumInputs() != 1 || ss.NumOutputs() != 1)
+    Fail("the sim model must be SISO; it has " + std::to_string(ss.NumInputs()) + " inputs and " +
+         std::to_string(ss.NumOutputs()) + " outputs");
+  TransferFunction tf = ToTransferFunction(ss);
+  tf.delay_s = ss.delay_s;
+  return tf;
+}
+
+GapRecord ToGapRecord(const IoRecord& record) {
+  if (record.NumInputs() != 1 || record.NumOutputs() != 1)
+    Fail("the records must be SISO (t,u,y); this one has " + std::to_string(record.NumInputs()) +
+         " inputs and " + std::to_string(record.NumOutputs()) + " outputs");
+  GapRecord r;
+  r.u = record.u.col(0);
+  r.y = record.y.col(0);
+  r.sample_time = record.sample_time;
+  return r;
+}
+
+void SplitRecord(const GapRecord& record, std::vector<GapRecord>& estimation,
+                 std::vector<GapRecord>& validation) {
+  const long n = record.u.size();
+  const long half = n / 2;
+  GapRecord est = record;
+  est.u = record.u.head(half);
+  est.y = record.y.head(half);
+  est.score_from = 0;
+  GapRecord val = record;
+  val.score_from = static_cast<int>(half);
+  estimation.push_back(est);
+  validation.push_back(val);
+}
+
+GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRecord>& estimation_in,
+                      const std::vector<GapRecord>& validation_in, const GapOptions& options) {
+  if (estimation_in.empty()) Fail("no estimation records");
+  const double ts = estimation_in.front().sample_time;
+  if (!(ts > 0)) Fail("the records' sample time must be positive");
+  const TransferFunction g0 = ContinuousSimModel(sim_model, ts);
+  const int order = g0.Order();
+  const int min_samples = std::max(20, 10 * (order + 4));
+
+  GapReport report;
+  std::vector<GapRecord> estimation, validation;
+  if (validation_in.empty()) {
+    if (estimation_in.size() == 1) {
+      if (estimation_in.front().u.size() < 2 * min_samples)
+        Fail("the record has " + std::to_string(estimation_in.front().u.size()) +
+             " samples: too short to split into estimation and validation halves (need " +
+             std::to_string(2 * min_samples) + ")");
+      SplitRecord(estimation_in.front(), estimation, validation);
+      report.notes.push_back(
+          "one record and no validation record: estimation on the first half, validation on the "
+          "second half (simulated through the first half to carry the state)");
+    } else {
+      estimation.assign(estimation_in.begin(), estimation_in.end() - 1);
+      validation.push_back(estimation_in.back());
+      report.notes.push_back("no validation record: the last estimation record is held out");
+    }
+  } else {
+    estimation = estimation_in;
+    validation = validation_in;
+  }
+  CheckRecords(estimation, "estimation", ts, min_samples);
+  CheckRecords(validation, "validation", ts, min_samples);
+
+  Scales scales;
+  scales.ts = ts;
+  std::vector<double> all_u, all_y;
+  double duration = 0;
+  for (const auto& r : estimation) {
+    all_u.insert(all_u.end(), r.u.data(), r.u.data() + r.u.size());
+    all_y.insert(all_y.end(), r.y.data(), r.y.data() + r.y.size());
+    duration = std::max(duration, r.u.size() * ts);
+  }
+  scales.slow = SlowTimeConstant(g0, ts, duration);
+  scales.u_max = std::max(1e-12, std::max(std::abs(*std::max_element(all_u.begin(), all_u.end())),
+                                          std::abs(*std::min_element(all_u.begin(), all_u.end()))));
+  scales.y_max = std::max(1e-12, std::max(std::abs(*std::max_element(all_y.begin(), all_y.end())),
+                                          std::abs(*std::min_element(all_y.begin(), all_y.end()))));
+  const double uq[5] = {0.02, 0.15, 0.5, 0.85, 0.98};
+  for (int i = 0; i < 5; ++i) scales.u_quantile[i] = Quantile(all_u, uq[i]);
+  const double yq[4] = {0.005, 0.02, 0.98, 0.995};
+  for (int i = 0; i < 4; ++i) scales.y_quantile[i] = Quantile(all_y, yq[i]);
+
+  long n_est = 0, n_val = 0;
+  for (const auto& r : estimation) n_est += r.u.size() - r.score_from;
+  for (const auto& r : validation) n_val += r.u.size() - r.score_from;
+  report.estimation_samples = static_cast<int>(n_est);
+  report.validation_samples = static_cast<int>(n_val);
+
+  const std::vector<EffectKind> kinds = options.candidates.empty() ? AllEffects() : options.candidates;
+  const Eigen::VectorXd y_val = Stack(validation, [](const GapRecord& r) { return r.y; });
+
+  FitContext ctx;
+  ctx.g0 = &g0;
+  ctx.estimation = &estimation;
+  ctx.validation = &validation;
+  ctx.options = &options;
+  ctx.n_est = n_est;
+  ctx.n_val = n_val;
+  ctx.y_val = y_val;
+  ChooseFitScheme(g0, estimation, ts, ctx);
+  GapVerdict& v = report.verdict;
+  v.fit_scheme = ctx.nuisance.segment > 0 ? "multiple_shooting" : "single_shooting";
+  v.shooting_segment = ctx.nuisance.segment;
+  if (ctx.nuisance.segment > 0)
+    report.notes.push_back(
+        "G0 integrates or is lightly damped (slowest decay over the record < e^-5): fitted by "
+        "multiple shooting, a free state per segment of " + std::to_string(ctx.nuisance.segment) +
+        " samples, so that the open-loop simulation cannot drift");
+  v.nuisance.initial_state = ctx.nuisance.segment > 0
+                                 ? "free per segment of " + std::to_string(ctx.nuisance.segment) + " samples (least squares)"
+                                 : "free per record (least squares)";
+
+  // G0 as given (with the nuisance), and G0 refitted (parameter_mismatch): the references.
+  const Candidate as_is(g0, [&] {
+    CandidateSpec spec = SpecFor(ctx, {EffectKind::kNone});
+    spec.fit_plant = false;
+    return spec;
+  }(), scales, options.substeps);
+  const Residuals as_is_residuals{&as_is, &estimation, n_est};
+  const FitOutcome as_is_fit =
+      Minimise(as_is_residuals, Eigen::VectorXd::Zero(as_is.Size()), options.evaluations_polish * (as_is.Size() + 1));
+  const Eigen::VectorXd y0_val =
+      Stack(validation, [&](const GapRecord& r) { return as_is.Predict(as_is_fit.x, r); });
+  const Candidate refit(g0, SpecFor(ctx, {EffectKind::kParameterMismatch}), scales, options.substeps);
+  const Residuals refit_residuals{&refit, &estimation, n_est};
+  Eigen::VectorXd refit_start = Eigen::VectorXd::Zero(refit.Size());
+  if (as_is.Size() > 0) refit_start.tail(as_is.Size()) = as_is_fit.x;  // du
+  const FitOutcome refit_fit =
+      Minimise(refit_residuals, refit_start, options.evaluations_polish * (refit.Size() + 1));
+  const Eigen::VectorXd y_refit_val =
+      Stack(validation, [&](const GapRecord& r) { return refit.Predict(refit_fit.x, r); });
+  {
+    // Lag that best aligns G0's output with the measured one (a delay's natural start).
+    const GapRecord& first = estimation.front();
+    const Eigen::VectorXd y0 = as_is.Predict(as_is_fit.x, first);
+    const long n = first.y.size();
+    const long max_lag = std::min<long>(n / 4, static_cast<long>(10 * scales.slow / ts) + 1);
+    const Eigen::VectorXd yc = first.y.array() - first.y.mean(), y0c = y0.array() - y0.mean();
+    double best = -INFINITY;
+    for (long lag = 0; lag <= max_lag; ++lag) {
+      const double c = yc.tail(n - lag).dot(y0c.head(n - lag)) / std::sqrt(double(n - lag));
+      if (c > best) best = c, scales.lag_of_best_match = lag * ts;
+    }
+  }
+  ctx.scales = scales;
+  ctx.y0_val = y0_val;
+  ctx.y_refit_val = y_refit_val;
+  ctx.as_is_mse = as_is_fit.mse;
+  ctx.as_is_size = as_is.Size();
+  ctx.refit_fit = refit_fit;
+  ctx.refit_size = refit.Size();
+  ctx.q_step = QuantisationStep(estimation, &ctx.q_strength);
+  ctx.k_effects = std::max<int>(1, static_cast<int>(kinds.size()) - 2);
+  auto fit_one = [&](EffectKind kind) {
+    CandidateWork w;
+    CandidateFit& c = w.fit;
+    if (kind == EffectKind::kNone) {
+      w = ReferenceWork(as_is, as_is_fit, y0_val, estimation);
+      c.effect.kind = kind;
+      c.plant = g0;
+      c.significant = true;
+    } else if (kind == EffectKind::kParameterMismatch) {
+      w = ReferenceWork(refit, refit_fit, y_refit_val, estimation);
+    } else {
+      FitEffect(ctx, kind, w);
+    }
+    ScoreCandidate(ctx, w);
+    return w;
+  };
+  // The candidates are independent: fit them in parallel (results do not depend on the
+  // schedule; each candidate is fitted deterministically).
+  std::vector<CandidateWork> work(kinds.size());
+  ParallelFor(kinds.size(), options.threads, [&](size_t i) { work[i] = fit_one(kinds[i]); },
+              [&](size_t i) { return std::string("fitting ") + EffectName(kinds[i]); });
+  report.ranking = RankCandidates(work, options);
+
+  // Noise floor: the smallest estimation residual among the candidates.
+  double noise_mse = std::numeric_limits<double>::infinity();
+  for (const auto& c : report.ranking) noise_mse = std::min(noise_mse, c.estimation_mse);
+  const double y_val_spread = (y_val.array() - y_val.mean()).matrix().norm() / std::sqrt(double(n_val));
+
+  const CandidateFit& top = report.ranking.front();
+  v.effect = EffectName(top.effect.kind);
+  v.confidence = top.score;
+  AdoptCandidate(top, v);
+  v.params = top.effect;
+  v.nrmse_before = Nrmse(y_val, y0_val)(0);
+  const double noise_nrmse = std::sqrt(noise_mse) / std::max(y_val_spread, 1e-300);
+  if (report.ranking.size() > 1 && report.ranking[1].eligible &&
+      report.ranking[1].bic - top.bic < options.ambiguity_bic) {
+    v.effect = "ambiguous";
+    v.tied = {EffectName(top.effect.kind), EffectName(report.ranking[1].effect.kind)};
+  }
+  // A two-valued input (PRBS, random binary) passes a dead zone, backlash or a symmetric
+  // saturation as a mere gain: when the gap is a pure gain change, those cannot be told from a
+  // parameter mismatch with this data.
+  if (v.effect == "parameter_mismatch" && BinaryInput(estimation) && BinaryInput(validation)) {
+    Candidate gain(g0, SpecFor(ctx, {EffectKind::kParameterMismatch}), scales, options.substeps);
+    gain.SetGainOnly();
+    Residuals gain_residuals{&gain, &estimation, n_est};
+    Eigen::VectorXd gain_start = Eigen::VectorXd::Zero(gain.Size());
+    if (as_is.Size() > 0) gain_start.tail(as_is.Size()) = as_is_fit.x;
+    const FitOutcome gain_fit = Minimise(gain_residuals, gain_start, 200);
+    const double lr = n_est * std::log(gain_fit.mse / refit_fit.mse);
+    const int dof = std::max(1, refit.Size() - gain.Size());
+    if (lr < ChiSquareQuantile(1 - options.significance, dof)) {
+      v.effect = "ambiguous";
+      v.tied = {"parameter_mismatch", "dead_zone", "backlash", "input_saturation"};
+      v.confidence = 1.0 / v.tied.size();  // nothing in the data prefers one of them
+      report.notes.push_back(
+          "the input takes two values only, and the gap is a pure gain change (gain-only refit "
+          "not worse: LR " + std::to_string(lr) + "): input dead zone, backlash and symmetric "
+          "saturation act as a gain on such a signal (an asymmetric saturation as a gain plus an offset, which the output offset absorbs) and cannot be told from a parameter "
+          "mismatch; excite at several amplitudes to separate them");
+    }
+  }
+  // The linear part itself (linear_order.cc); then the diagnosis again on the fixed linear part.
+  TransferFunction higher;
+  const bool unmodelled = options.check_linear_order && v.effect != "none" && v.effect != "ambiguous" &&
+                          TestUnmodelledDynamics(ctx, top, report, &higher);
+  if (unmodelled) {
+    GapOptions inner = options;
+    inner.check_linear_order = false;
+    try {
+      const GapReport after = DiagnoseGap(higher, estimation, validation, inner);
+      const GapVerdict& a = after.verdict;
+      if (!a.effects.empty() && a.effect != "ambiguous" && a.effect != "parameter_mismatch") {
+        v.effects = a.effects;
+        v.effects_std = a.effects_std;
+        v.params = a.params;
+        v.param_std = a.param_std;
+        v.plant = a.plant;
+        v.nrmse_after = a.nrmse_after;
+        v.nuisance = a.nuisance;
+        v.nuisance.initial_state = after.verdict.nuisance.initial_state;
+      }
+      report.notes.push_back("after the linear part is fixed (order " + std::to_string(v.linear_order) +
+                             "): " + a.effect + ", validation NRMSE " + std::to_string(a.nrmse_after));
+    } catch (const std::exception& e) {
+      report.notes.push_back(std::string("diagnosis on the higher-order linear part failed: ") + e.what());
+    }
+  }
+  // A second effect, by forward selection (effect_pairs.cc), from the best eligible effect —
+  // also when parameter_mismatch tops the ranking: two effects together can leave a linear
+  // refit as the best single explanation.
+  if (!unmodelled && v.effect != "ambiguous" && top.effect.kind != EffectKind::kNone &&
+      options.second_effect) {
+    const CandidateWork* first = nullptr;
+    for (const CandidateWork& w : work)
+      if (w.fit.eligible && !w.fit.effects.empty()) {
+        first = &w;
+        break;
+      }
+    if (first) SelectSecondEffect(ctx, *first, top.bic, kinds, report);
+  }
+  const double explainable = v.nrmse_before - noise_nrmse;
+  v.shrink = explainable > 0 ? (v.nrmse_before - v.nrmse_after) / explainable : 0.0;
+  if (v.effect == "none")
+    v.explanation = "no candidate explains the gap better than noise: G0 fits within the noise";
+  else if (v.effect == "unmodelled_dynamics")
+    v.explanation = "the linear part lacks dynamics: a linear model of order " +
+                    std::to_string(v.linear_order) + " beats every single effect (validation NRMSE " +
+                    std::to_string(v.linear_nrmse_after) + ")" +
+                    (v.effects.empty() ? std::string("; no static effect remains after it")
+                                       : "; after it, " + std::string(EffectName(v.effects[0].kind)) +
+                                             " brings the validation NRMSE to " + std::to_string(v.nrmse_after));
+  else if (v.effect == "ambiguous")
+    v.explanation = "the top candidates (" + v.tied[0] + ", " + v.tied[1] +
+                    (v.tied.size() > 2 ? ", …" : "") +
+                    ") fit the validation data equally well; more informative data would separate them";
+  else {
+    std::string named = v.effect;
+    if (v.effects.size() > 1) named += " with " + std::string(EffectName(v.effects[1].kind));
+    v.explanation = named + " closes " + std::to_string(int(std::round(100 * v.shrink))) +
+                    " % of the explainable gap on the validation records";
+  }
+
+  report.where = LocateGap(g0, validation, std::sqrt(noise_mse));
+  report.where.noise_nrmse = noise_nrmse;
+  return report;
+}
+
+}  // namespace idrig
