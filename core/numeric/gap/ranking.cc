@@ -1,0 +1,88 @@
+// Significance and ranking of the gap diagnosis' candidates (see gap_diagnosis.h): the
+// likelihood-ratio test on the estimation records (Wilks), the validation BIC and the signature
+// check, then eligibility, ordering and BIC weights.
+#include <algorithm>
+#include <cmath>
+
+#include "core/numeric/gap/gap_internal.h"
+#include "core/numeric/validation.h"
+
+namespace idrig::gap_detail {
+
+// Every sample within 2 % of the range from the minimum or the maximum.
+bool BinaryInput(const std::vector<GapRecord>& records) {
+  for (const auto& r : records) {
+    const double lo = r.u.minCoeff(), hi = r.u.maxCoeff(), tol = 0.02 * (hi - lo);
+    for (long k = r.score_from; k < r.u.size(); ++k)
+      if (std::abs(r.u(k) - lo) > tol && std::abs(r.u(k) - hi) > tol) return false;
+  }
+  return true;
+}
+
+double Correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  const Eigen::VectorXd ac = a.array() - a.mean(), bc = b.array() - b.mean();
+  const double d = ac.norm() * bc.norm();
+  return d > 0 ? ac.dot(bc) / d : 0.0;
+}
+
+void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
+  CandidateFit& c = w.fit;
+  const EffectKind kind = c.effect.kind;
+  const long n_est = ctx.n_est, n_val = ctx.n_val;
+  const GapOptions& options = *ctx.options;
+  const double as_is_mse = ctx.as_is_mse;
+  const Eigen::VectorXd& y_val = ctx.y_val;
+  const Eigen::VectorXd& y0_val = ctx.y0_val;
+  const Eigen::VectorXd& y_refit_val = ctx.y_refit_val;
+  const int k_effects = ctx.k_effects;
+  // Likelihood ratio on the estimation records (Wilks): the effect against the refitted G0,
+  // the refitted G0 against G0, each at the Bonferroni-corrected level.
+  if (kind != EffectKind::kNone) {
+    const double reference = kind == EffectKind::kParameterMismatch ? as_is_mse : ctx.refit_fit.mse;
+    const int dof = kind == EffectKind::kParameterMismatch
+                        ? std::max(1, c.parameters)
+                        : std::max(1, c.parameters - ctx.refit_size);
+    const double level = kind == EffectKind::kParameterMismatch ? options.significance
+                                                                : options.significance / k_effects;
+    c.likelihood_ratio = n_est * std::log(reference / std::max(c.estimation_mse, 1e-300));
+    c.lr_threshold = ChiSquareQuantile(1 - level, dof);
+    c.significant = c.likelihood_ratio > c.lr_threshold;
+  }
+  c.validation_mse = (y_val - w.y_val).squaredNorm() / n_val;
+  c.nrmse_after = Nrmse(y_val, w.y_val)(0);
+  c.bic = n_val * std::log(std::max(c.validation_mse, 1e-300)) + c.parameters * std::log(double(n_est));
+  if (kind == EffectKind::kNone) {
+    c.signature = 1;
+  } else if (kind == EffectKind::kParameterMismatch) {
+    c.signature = Correlation(w.y_val - y0_val, y_val - y0_val);
+  } else {
+    c.signature = Correlation(w.y_val - y_refit_val, y_val - y_refit_val);
+  }
+}
+
+std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork> work, const GapOptions& options) {
+  // Eligibility: an effect must beat the refitted G0 significantly and reproduce the gap's
+  // signature; parameter_mismatch must beat G0; none is always eligible.
+  for (auto& w : work) {
+    CandidateFit& c = w.fit;
+    if (c.effect.kind == EffectKind::kNone) c.eligible = true;
+    else if (c.effect.kind == EffectKind::kParameterMismatch) c.eligible = c.significant;
+    else c.eligible = c.significant && c.signature >= options.min_signature;
+  }
+  std::sort(work.begin(), work.end(), [](const CandidateWork& a, const CandidateWork& b) {
+    if (a.fit.eligible != b.fit.eligible) return a.fit.eligible;
+    return a.fit.bic < b.fit.bic;
+  });
+  const double best_bic = work.front().fit.bic;
+  double total = 0;
+  for (auto& w : work)
+    if (w.fit.eligible) total += std::exp(-0.5 * (w.fit.bic - best_bic));
+  std::vector<CandidateFit> ranking;
+  for (auto& w : work) {
+    w.fit.score = w.fit.eligible ? std::exp(-0.5 * (w.fit.bic - best_bic)) / total : 0.0;
+    ranking.push_back(w.fit);
+  }
+  return ranking;
+}
+
+}  // namespace idrig::gap_detail
