@@ -65,6 +65,18 @@ Effect EffectFromJson(const nlohmann::json& json) {
   return effect;
 }
 
+static nlohmann::json NoiseFloorJson(const NoiseFloor& f, double nrmse) {
+  nlohmann::json j = {{"method", f.method}, {"sigma", f.sigma}, {"nrmse", nrmse}, {"samples", f.samples}};
+  if (f.method == "periods") {
+    j["period_samples"] = f.period;
+    j["periods"] = f.periods;
+  } else if (f.method == "arx_prediction") {
+    j["order"] = f.order;
+    j["ar_gain"] = f.ar_gain;
+  }
+  return j;
+}
+
 nlohmann::json GapReportToJson(const GapReport& report) {
   const GapVerdict& v = report.verdict;
   nlohmann::json verdict = {
@@ -73,6 +85,9 @@ nlohmann::json GapReportToJson(const GapReport& report) {
       {"nrmse_before", v.nrmse_before},
       {"nrmse_after", v.nrmse_after},
       {"shrink", v.shrink},
+      {"noise_nrmse", v.noise_nrmse},
+      {"remaining_gap_to_noise", v.remaining_gap_to_noise},
+      {"below_noise_floor", v.below_noise_floor},
       {"effect_fitted", EffectName(v.params.kind)},
       {"params", Params(v.params)},
       {"params_std", Params(Effect{v.params.kind, v.param_std})},
@@ -122,6 +137,7 @@ nlohmann::json GapReportToJson(const GapReport& report) {
   nlohmann::json where = {
       {"nrmse_before", w.nrmse_before},
       {"noise_nrmse", w.noise_nrmse},
+      {"noise_floor", NoiseFloorJson(w.noise_floor, w.noise_nrmse)},
       {"gap_to_noise", w.gap_to_noise},
       {"gap_significant", w.gap_significant},
       {"residual_white", w.residual_white},
@@ -153,7 +169,11 @@ std::string GapReportText(const nlohmann::json& report) {
   s << "  " << v.at("explanation").get<std::string>() << "\n";
   s << "  validation NRMSE before " << v.at("nrmse_before").get<double>() << ", after "
     << v.at("nrmse_after").get<double>() << ", noise floor "
-    << report.at("where").at("noise_nrmse").get<double>() << "\n";
+    << report.at("where").at("noise_nrmse").get<double>();
+  if (report.at("where").contains("noise_floor"))
+    s << " (" << report["where"]["noise_floor"].value("method", "") << ")";
+  if (v.value("below_noise_floor", false)) s << ", below the floor";
+  s << "\n";
   for (const auto& [name, value] : v.at("params").items()) {
     s << "  " << name << " = " << value;
     const auto& sd = v.at("params_std")[name];

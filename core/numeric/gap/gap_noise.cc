@@ -173,4 +173,12 @@ NoiseFloor EstimateNoiseFloor(const std::vector<GapRecord>& estimation,
   return floor;
 }
 
+void ApplyNoiseFloor(double floor_nrmse, GapVerdict& v) {
+  v.noise_nrmse = floor_nrmse;
+  const double explainable = v.nrmse_before - floor_nrmse;
+  v.shrink = explainable > 0 ? (v.nrmse_before - v.nrmse_after) / explainable : 0.0;
+  v.remaining_gap_to_noise = v.nrmse_after - floor_nrmse;
+  v.below_noise_floor = v.nrmse_after < floor_nrmse;
+}
+
 }  // namespace idrig

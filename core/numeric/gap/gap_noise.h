@@ -42,4 +42,11 @@ struct NoiseFloor {
 NoiseFloor EstimateNoiseFloor(const std::vector<GapRecord>& estimation,
                               const std::vector<GapRecord>& validation);
 
+struct GapVerdict;
+// The verdict's figures against an independent floor (all NRMSE on the validation records):
+// shrink = (before − after)/(before − floor) (0 when before ≤ floor: nothing to explain),
+// remaining_gap_to_noise = after − floor, below_noise_floor = after < floor (then shrink may
+// exceed 1: the floor is an upper bound that the model beat, or the noise is coloured).
+void ApplyNoiseFloor(double floor_nrmse, GapVerdict& verdict);
+
 }  // namespace idrig

@@ -310,9 +310,18 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
 
   report.ranking = RankCandidates(std::move(work), options);
 
-  // Noise floor: the smallest estimation residual among the candidates.
-  double noise_mse = std::numeric_limits<double>::infinity();
-  for (const auto& c : report.ranking) noise_mse = std::min(noise_mse, c.estimation_mse);
+  // Noise floor, estimated without the candidates (gap_noise.h); records too short for it fall
+  // back to the smallest estimation residual among the candidates (said in the method).
+  NoiseFloor floor;
+  try {
+    floor = EstimateNoiseFloor(estimation, validation);
+  } catch (const std::invalid_argument&) {
+    double noise_mse = std::numeric_limits<double>::infinity();
+    for (const auto& c : report.ranking) noise_mse = std::min(noise_mse, c.estimation_mse);
+    floor.method = "best_candidate_residual";
+    floor.sigma = std::sqrt(noise_mse);
+    floor.samples = n_est;
+  }
   const double y_val_spread = (y_val.array() - y_val.mean()).matrix().norm() / std::sqrt(double(n_val));
 
   const CandidateFit& top = report.ranking.front();
@@ -324,9 +333,8 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   v.plant = top.plant;
   v.nrmse_before = Nrmse(y_val, y0_val)(0);
   v.nrmse_after = top.nrmse_after;
-  const double noise_nrmse = std::sqrt(noise_mse) / std::max(y_val_spread, 1e-300);
-  const double explainable = v.nrmse_before - noise_nrmse;
-  v.shrink = explainable > 0 ? (v.nrmse_before - v.nrmse_after) / explainable : 0.0;
+  const double noise_nrmse = floor.sigma / std::max(y_val_spread, 1e-300);
+  ApplyNoiseFloor(noise_nrmse, v);
   if (report.ranking.size() > 1 && report.ranking[1].eligible &&
       report.ranking[1].bic - top.bic < options.ambiguity_bic) {
     v.effect = "ambiguous";
@@ -363,8 +371,9 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     v.explanation = v.effect + " closes " + std::to_string(int(std::round(100 * v.shrink))) +
                     " % of the explainable gap on the validation records";
 
-  report.where = LocateGap(g0, validation, std::sqrt(noise_mse));
+  report.where = LocateGap(g0, validation, floor.sigma);
   report.where.noise_nrmse = noise_nrmse;
+  report.where.noise_floor = floor;
   return report;
 }
 

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "core/numeric/gap/gap_bench.h"
+#include "core/numeric/gap/gap_diagnosis.h"
 #include "core/numeric/signal/excitation.h"
 
 namespace idrig {
@@ -75,6 +76,44 @@ TEST(GapNoiseTest, ArxPredictionBoundsTheNoiseFromAboveAndTightly) {
       EXPECT_LT(f.sigma, 1.10 * c.noise_sigma) << EffectName(kind) << " seed " << seed;
     }
   }
+}
+
+TEST(GapNoiseTest, TheDiagnosisShrinksAgainstTheIndependentFloor) {
+  std::mt19937_64 rng(12);
+  GapCaseOptions options;
+  options.samples = 2500;
+  options.excitation = "levels";
+  const GapCase c = MakeGapCase(EffectKind::kCubicStiffness, rng, options);
+  GapOptions gap;
+  gap.threads = 1;
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, gap);
+  const GapVerdict& v = report.verdict;
+  EXPECT_EQ(report.where.noise_floor.method, "arx_prediction");
+  EXPECT_NEAR(report.where.noise_floor.sigma, c.noise_sigma, 0.1 * c.noise_sigma);
+  EXPECT_DOUBLE_EQ(v.noise_nrmse, report.where.noise_nrmse);
+  EXPECT_DOUBLE_EQ(v.remaining_gap_to_noise, v.nrmse_after - v.noise_nrmse);
+  EXPECT_EQ(v.below_noise_floor, v.nrmse_after < v.noise_nrmse);
+  if (!v.below_noise_floor) EXPECT_LE(v.shrink, 1.0);
+  // The right effect leaves about the noise: what remains is small against the gap it closed.
+  EXPECT_LT(std::abs(v.remaining_gap_to_noise), 0.1 * (v.nrmse_before - v.noise_nrmse));
+}
+
+TEST(GapNoiseTest, ShrinkIsZeroWhenThereIsNothingToExplainAndFlaggedBelowTheFloor) {
+  GapVerdict v;
+  v.nrmse_before = 0.05;
+  v.nrmse_after = 0.05;
+  ApplyNoiseFloor(0.06, v);
+  EXPECT_EQ(v.shrink, 0.0);
+  EXPECT_TRUE(v.below_noise_floor);
+  v.nrmse_before = 0.2;
+  v.nrmse_after = 0.04;
+  ApplyNoiseFloor(0.05, v);
+  EXPECT_NEAR(v.shrink, 0.16 / 0.15, 1e-12);  // > 1, and said so
+  EXPECT_TRUE(v.below_noise_floor);
+  ApplyNoiseFloor(0.02, v);
+  EXPECT_NEAR(v.shrink, 0.16 / 0.18, 1e-12);
+  EXPECT_FALSE(v.below_noise_floor);
+  EXPECT_NEAR(v.remaining_gap_to_noise, 0.02, 1e-12);
 }
 
 TEST(GapNoiseTest, RecordsTooShortForAnyPredictorAreNamed) {
