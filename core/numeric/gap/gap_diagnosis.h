@@ -78,6 +78,7 @@ struct GapWhere {
   double nrmse_before = 0;       // G0 on all records, simulation NRMSE
   double noise_nrmse = 0;        // noise floor as NRMSE (noise_floor.sigma / spread of y_val)
   NoiseFloor noise_floor;        // how the floor was estimated (without the candidates)
+  DetectionLines detection_lines;  // even/odd lines of a periodic odd multisine (if any)
   double gap_to_noise = 0;       // RMS(y − ŷ0) / σ̂
   bool gap_significant = false;
   bool residual_white = false, residual_independent = false;  // tests on y − ŷ0

@@ -44,6 +44,26 @@ Periodicity FindPeriod(const Eigen::VectorXd& u, int min_period) {
   return p;
 }
 
+int SteadyPeriodStart(const Eigen::VectorXd& y, const Periodicity& p) {
+  if (p.periods < 3) return 0;
+  std::vector<double> change(p.periods - 1);
+  for (int j = 0; j + 1 < p.periods; ++j) {
+    double d = 0;
+    for (int k = 0; k < p.period; ++k) {
+      const double step = y(static_cast<long>(j + 1) * p.period + k) - y(static_cast<long>(j) * p.period + k);
+      d += step * step;
+    }
+    change[j] = d;
+  }
+  std::vector<double> sorted = change;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  int first = 0;
+  for (int j = 0; j + 2 < p.periods; ++j)
+    if (change[j] > 1.5 * median) first = j + 1;
+  return first;
+}
+
 namespace {
 
 // ARX(n, n+1) regressors of one record at sample k: −y(k−1..k−n), u(k..k−n), 1.
@@ -68,23 +88,7 @@ NoiseFloor EstimateNoiseFloor(const std::vector<GapRecord>& estimation,
   for (const GapRecord* r : all) {
     const Periodicity p = FindPeriod(r->u);
     if (p.period == 0) continue;
-    // Leading periods that still hold the transient: consecutive-period differences above 1.5×
-    // their median (at least two periods are kept).
-    std::vector<double> change(p.periods - 1);
-    for (int j = 0; j + 1 < p.periods; ++j) {
-      double d = 0;
-      for (int k = 0; k < p.period; ++k) {
-        const double step = r->y(static_cast<long>(j + 1) * p.period + k) - r->y(static_cast<long>(j) * p.period + k);
-        d += step * step;
-      }
-      change[j] = d;
-    }
-    std::vector<double> sorted = change;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    const double median = sorted[sorted.size() / 2];
-    int first = 0;
-    for (int j = 0; j + 2 < p.periods; ++j)
-      if (change[j] > 1.5 * median) first = j + 1;
+    const int first = SteadyPeriodStart(r->y, p);
     const int m = p.periods - first;
     for (int k = 0; k < p.period; ++k) {
       double mean = 0;

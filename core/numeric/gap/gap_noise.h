@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "core/numeric/model/lti_model.h"
+
 namespace idrig {
 
 struct GapRecord;
@@ -17,6 +19,9 @@ struct Periodicity {
   int periods = 0;   // full periods in the record
 };
 Periodicity FindPeriod(const Eigen::VectorXd& u, int min_period = 8);
+// The first period of y that no longer holds the transient: leading periods whose difference to
+// the next exceeds 1.5× the median consecutive-period difference are dropped (two are kept).
+int SteadyPeriodStart(const Eigen::VectorXd& y, const Periodicity& p);
 
 // The output noise level, estimated without any candidate of the diagnosis.
 //  - "periods": the input is periodic in at least one record — the sample variance of y across
@@ -41,6 +46,43 @@ struct NoiseFloor {
 // Throws std::invalid_argument when the records are too short for even the lowest order.
 NoiseFloor EstimateNoiseFloor(const std::vector<GapRecord>& estimation,
                               const std::vector<GapRecord>& validation);
+
+// Even/odd detection lines of a periodic odd multisine (gap_lines.cc), after Pintelon and
+// Schoukens (System Identification: A Frequency Domain Approach, 2nd ed., §3.5 and §4.3): the
+// DFT of every steady period; on the excited (odd) lines the best linear approximation
+// G_BLA(k) = Ȳ(k)/Ū(k); on the non-excited lines the output holds only noise and nonlinear
+// distortion — odd-degree distortion falls on odd lines, even-degree on even lines. The noise of
+// the period mean, σ²(k) = Σ_p |Y_p(k) − Ȳ(k)|²/(M(M−1)), comes from the M periods.
+struct DetectionLine {
+  double f_hz = 0;
+  int line = 0;                  // DFT line of one period
+  std::string kind;              // "excited", "odd" (non-excited odd), "even"
+  double y_power = 0;            // |Ȳ(k)|²
+  double noise_power = 0;        // σ²(k) of the mean
+  bool significant = false;      // |Ȳ|²/σ² above the 99.9 % level of F(2, 2(M−1))
+  // excited lines: the BLA, its noise 1σ and its nonlinear-distortion 1σ (from the odd detection
+  // lines next to it; NaN when there are none), and G0 there when the sim model is known
+  double bla_magnitude = 0, bla_phase = 0, bla_noise_std = 0, bla_distortion_std = 0;
+  double sim_magnitude = 0;
+};
+
+struct DetectionLines {
+  bool available = false;
+  std::string reason;            // why not, when not available
+  int period_samples = 0, periods = 0, steady_from = 0;
+  double f0_hz = 0;              // line spacing
+  int excited = 0, odd_lines = 0, even_lines = 0;  // counts in the excited band
+  bool odd_out_of_band = false;  // no odd detection line in band: odd lines above it used
+  int odd_significant = 0, even_significant = 0;
+  double odd_to_noise_db = 0, even_to_noise_db = 0;    // mean |Ȳ|² / mean σ² on the lines
+  double odd_to_output_db = 0, even_to_output_db = 0;  // mean |Ȳ|² / mean |Ȳ|² on excited lines
+  bool odd_distortion = false, even_distortion = false;  // more significant lines than chance
+  double bla_vs_sim = 0;         // median |G_BLA − G0|/|G0| on excited lines (sim model given)
+  std::vector<DetectionLine> lines;  // in frequency order, up to 3× the highest excited line
+};
+// The first record whose input is a periodic odd multisine (at least two periods). `sim`: G0,
+// or null. Never throws on data that do not qualify: available = false with the reason.
+DetectionLines AnalyseDetectionLines(const std::vector<GapRecord>& records, const TransferFunction* sim);
 
 struct GapVerdict;
 // The verdict's figures against an independent floor (all NRMSE on the validation records):

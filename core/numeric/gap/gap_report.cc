@@ -374,6 +374,9 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   report.where = LocateGap(g0, validation, floor.sigma);
   report.where.noise_nrmse = noise_nrmse;
   report.where.noise_floor = floor;
+  std::vector<GapRecord> all_records = estimation;
+  all_records.insert(all_records.end(), validation.begin(), validation.end());
+  report.where.detection_lines = AnalyseDetectionLines(all_records, &g0);
   return report;
 }
 
