@@ -122,6 +122,21 @@ nlohmann::json GapReportToJson(const GapReport& report) {
       {"explanation", v.explanation},
   };
   if (!v.tied.empty()) verdict["tied"] = v.tied;
+  nlohmann::json effects = nlohmann::json::array();
+  for (size_t i = 0; i < v.effects.size(); ++i)
+    effects.push_back({{"effect", EffectName(v.effects[i].kind)},
+                       {"params", Params(v.effects[i], i < v.effects_std.size() ? &v.effects_std[i] : nullptr)}});
+  verdict["effects"] = effects;
+  nlohmann::json output_offset = nlohmann::json::array();
+  for (double b : v.nuisance.output_offset) output_offset.push_back(Number(b));
+  verdict["nuisance"] = {
+      {"input_offset", v.nuisance.input_offset_fitted ? Number(v.nuisance.input_offset) : nlohmann::json()},
+      {"input_offset_std", v.nuisance.input_offset_fitted ? Number(v.nuisance.input_offset_std) : nlohmann::json()},
+      {"output_offset", output_offset},
+      {"initial_state", v.nuisance.initial_state},
+  };
+  verdict["fit_scheme"] = v.fit_scheme;
+  if (v.shooting_segment > 0) verdict["shooting_segment"] = v.shooting_segment;
 
   nlohmann::json ranking = nlohmann::json::array();
   for (const auto& c : report.ranking) {
@@ -166,6 +181,10 @@ nlohmann::json GapReportToJson(const GapReport& report) {
       {"noise_nrmse", w.noise_nrmse},
       {"noise_floor", NoiseFloorJson(w.noise_floor, w.noise_nrmse)},
       {"detection_lines", DetectionLinesJson(w.detection_lines)},
+      {"lattice", {{"lattice", w.lattice.lattice}, {"detected", w.lattice.detected}, {"step", w.lattice.step},
+                   {"offset", w.lattice.offset}, {"on_lattice", w.lattice.on_lattice},
+                   {"resultant", w.lattice.resultant}, {"levels", w.lattice.levels},
+                   {"noise_share", w.lattice.noise_share}, {"reason", w.lattice.reason}}},
       {"gap_to_noise", w.gap_to_noise},
       {"gap_significant", w.gap_significant},
       {"residual_white", w.residual_white},
@@ -207,6 +226,19 @@ std::string GapReportText(const nlohmann::json& report) {
     const auto& sd = v.at("params_std")[name];
     if (sd.is_number()) s << " ± " << sd.get<double>();
     s << "\n";
+  }
+  if (v.contains("effects") && v["effects"].size() > 1) {
+    const auto& second = v["effects"][1];
+    s << "  second effect: " << second.at("effect").get<std::string>() << "\n";
+    for (const auto& [name, value] : second.at("params").items())
+      s << "    " << name << " = " << value.at("value") << " ± " << value.at("std") << "\n";
+  }
+  if (v.contains("nuisance")) {
+    const auto& n = v["nuisance"];
+    s << "  nuisance: input offset " << n.at("input_offset") << ", output offset "
+      << (n.at("output_offset").empty() ? nlohmann::json() : n.at("output_offset")[0])
+      << ", initial state " << n.at("initial_state").get<std::string>() << "; fit "
+      << v.value("fit_scheme", "") << "\n";
   }
   s << "where: " << report.at("where").at("summary").get<std::string>() << "\n";
   if (report.at("where").contains("detection_lines") && report["where"]["detection_lines"].value("available", false)) {

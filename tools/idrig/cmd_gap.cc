@@ -1,5 +1,6 @@
 // idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--json]
 // idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--jobs J] [--offsets] [--combos F] [--json]
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -50,7 +51,14 @@ void WriteCase(const GapCase& c, const std::string& dir, int index) {
 
 // The names in verdict.effects (one or two), or verdict.effect alone.
 std::vector<std::string> NamedEffects(const GapReport& report) {
-  return {report.verdict.effect};
+  const GapVerdict& v = report.verdict;
+  if (v.effect == "none" || v.effect == "ambiguous") return {v.effect};
+  std::vector<std::string> names;
+  for (const Effect& e : v.effects)
+    if (e.kind != EffectKind::kNone) names.push_back(EffectName(e.kind));
+  if (names.empty() || names.front() != v.effect) names.insert(names.begin(), v.effect);
+  names.erase(std::unique(names.begin(), names.end()), names.end());
+  return names;
 }
 
 struct BenchSettings {

@@ -13,16 +13,49 @@
 
 namespace idrig::gap_detail {
 
-Candidate::Candidate(const TransferFunction& base, EffectKind kind, bool fit_plant,
-                     const Scales& scales, int substeps, std::vector<double> fixed)
-    : base_(base), kind_(kind), scales_(scales), substeps_(substeps), fixed_(std::move(fixed)) {
-  if (fit_plant) {
+namespace {
+
+double Pos(double v) { return std::exp(std::clamp(v, -30.0, 30.0)); }
+
+// Free response of the plant's sampled realisation: row k = C A^k (delay-free), n rows.
+Eigen::MatrixXd FreeResponse(const TransferFunction& plant, double ts, long n) {
+  TransferFunction g = plant;
+  g.delay_s = 0;
+  if (g.Order() == 0) return Eigen::MatrixXd(n, 0);
+  const StateSpace d = DiscretizeZoh(ToStateSpace(g), ts);
+  Eigen::MatrixXd f(n, d.A.rows());
+  Eigen::RowVectorXd c = d.C.row(0);
+  for (long k = 0; k < n; ++k) {
+    f.row(k) = c;
+    c = c * d.A;
+    if (!c.allFinite()) {
+      f.bottomRows(n - k - 1).setZero();
+      break;
+    }
+  }
+  return f;
+}
+
+}  // namespace
+
+Candidate::Candidate(const TransferFunction& base, const CandidateSpec& spec, const Scales& scales,
+                     int substeps)
+    : base_(base), spec_(spec), scales_(scales), substeps_(substeps) {
+  if (spec_.fixed.size() < spec_.kinds.size()) spec_.fixed.resize(spec_.kinds.size());
+  if (spec_.fit_plant) {
     for (int i = 1; i < base.den.size(); ++i)
       if (base.den(i) != 0) free_den_.push_back(i);
     for (int i = 0; i < base.num.size(); ++i)
       if (base.num(i) != 0) free_num_.push_back(i);
   }
-  effect_params_ = NumEffectParams(kind, fixed_);
+  int offset = PlantParams() + NuisanceParams();
+  for (size_t i = 0; i < spec_.kinds.size(); ++i) {
+    const int n = NumEffectParams(spec_.kinds[i], spec_.fixed[i]);
+    block_start_.push_back(offset);
+    block_size_.push_back(n);
+    offset += n;
+    effect_params_ += n;
+  }
 }
 
 int Candidate::NumEffectParams(EffectKind kind, const std::vector<double>& fixed) {
@@ -56,21 +89,27 @@ TransferFunction Candidate::Plant(const Eigen::VectorXd& x) const {
   return g;
 }
 
-Effect Candidate::EffectOf(const Eigen::VectorXd& x) const {
-  const Eigen::VectorXd phi = x.tail(effect_params_);
+double Candidate::InputOffset(const Eigen::VectorXd& x) const {
+  // Bounded to ±max|u| (an offset larger than the input's range is not an offset).
+  return spec_.input_offset ? std::tanh(x(PlantParams())) * scales_.u_max : 0.0;
+}
+
+Effect Candidate::EffectAt(const Eigen::VectorXd& x, size_t i) const {
+  const EffectKind kind = spec_.kinds[i];
+  const std::vector<double>& fixed = spec_.fixed[i];
+  const Eigen::VectorXd phi = x.segment(block_start_[i], block_size_[i]);
   const Scales& s = scales_;
-  auto pos = [](double v) { return std::exp(std::clamp(v, -30.0, 30.0)); };
   Effect e;
-  e.kind = kind_;
-  switch (kind_) {
-    case EffectKind::kTimeDelay: e.params = {pos(phi(0)) * s.ts}; break;
-    case EffectKind::kActuatorLag: e.params = {pos(phi(0)) * s.ts}; break;
+  e.kind = kind;
+  switch (kind) {
+    case EffectKind::kTimeDelay: e.params = {Pos(phi(0)) * s.ts}; break;
+    case EffectKind::kActuatorLag: e.params = {Pos(phi(0)) * s.ts}; break;
     case EffectKind::kUnmodelledResonance:
-      e.params = {pos(phi(0)) / s.ts, std::clamp(pos(phi(1)), 1e-4, 10.0)};
+      e.params = {Pos(phi(0)) / s.ts, std::clamp(Pos(phi(1)), 1e-4, 10.0)};
       break;
     case EffectKind::kInputSaturation:
     case EffectKind::kOutputSaturation: {
-      const double scale = kind_ == EffectKind::kInputSaturation ? s.u_max : s.y_max;
+      const double scale = kind == EffectKind::kInputSaturation ? s.u_max : s.y_max;
       double lo = phi(0) * scale, hi = phi(1) * scale;
       if (hi - lo < 1e-9 * scale) hi = lo + 1e-9 * scale;
       e.params = {lo, hi};
@@ -79,25 +118,38 @@ Effect Candidate::EffectOf(const Eigen::VectorXd& x) const {
     case EffectKind::kDeadZone:
     case EffectKind::kBacklash:
     case EffectKind::kCoulombFriction:
-      e.params = {pos(phi(0)) * s.u_max};
+      e.params = {Pos(phi(0)) * s.u_max};
       break;
     case EffectKind::kCubicStiffness:
       e.params = {phi(0) * s.u_max / std::pow(s.y_max, 3)};
       break;
     case EffectKind::kSensorNonlinearity:
-      if (fixed_.empty()) e.params = {1.0, phi(0) / s.y_max, phi(1) / (s.y_max * s.y_max), 0.0};
+      if (fixed.empty()) e.params = {1.0, phi(0) / s.y_max, phi(1) / (s.y_max * s.y_max), 0.0};
       else e.params = {1.0, 0.0, 0.0, 1.0};
       break;
-    case EffectKind::kOutputQuantization: e.params = {fixed_.at(0)}; break;
+    case EffectKind::kOutputQuantization: e.params = {fixed.at(0)}; break;
     default: break;
   }
   return e;
 }
 
-Eigen::VectorXd Candidate::Phi(const std::vector<double>& p) const {
+Effect Candidate::EffectOf(const Eigen::VectorXd& x) const {
+  if (spec_.kinds.empty()) return Effect{};
+  return EffectAt(x, 0);
+}
+
+std::vector<Effect> Candidate::Effects(const Eigen::VectorXd& x) const {
+  std::vector<Effect> out;
+  for (size_t i = 0; i < spec_.kinds.size(); ++i)
+    if (spec_.kinds[i] != EffectKind::kNone && spec_.kinds[i] != EffectKind::kParameterMismatch)
+      out.push_back(EffectAt(x, i));
+  return out;
+}
+
+Eigen::VectorXd Candidate::Phi(size_t i, const std::vector<double>& p) const {
   const Scales& s = scales_;
-  Eigen::VectorXd phi(effect_params_);
-  switch (kind_) {
+  Eigen::VectorXd phi(block_size_[i]);
+  switch (spec_.kinds[i]) {
     case EffectKind::kTimeDelay:
     case EffectKind::kActuatorLag: phi(0) = std::log(p[0] / s.ts); break;
     case EffectKind::kUnmodelledResonance:
@@ -108,10 +160,10 @@ Eigen::VectorXd Candidate::Phi(const std::vector<double>& p) const {
     case EffectKind::kOutputSaturation: phi << p[0] / s.y_max, p[1] / s.y_max; break;
     case EffectKind::kDeadZone:
     case EffectKind::kBacklash:
-    case EffectKind::kCoulombFriction: phi(0) = std::log(p[0] / s.u_max); break;
+    case EffectKind::kCoulombFriction: phi(0) = std::log(std::max(p[0], 1e-9 * s.u_max) / s.u_max); break;
     case EffectKind::kCubicStiffness: phi(0) = p[0] * std::pow(s.y_max, 3) / s.u_max; break;
     case EffectKind::kSensorNonlinearity:
-      if (effect_params_ == 2) phi << p[1] * s.y_max, p[2] * s.y_max * s.y_max;
+      if (block_size_[i] == 2) phi << p[1] * s.y_max, p[2] * s.y_max * s.y_max;
       break;
     case EffectKind::kOutputQuantization: phi(0) = std::log(p[0]); break;  // s/q
     default: break;
@@ -122,11 +174,23 @@ Eigen::VectorXd Candidate::Phi(const std::vector<double>& p) const {
 Eigen::VectorXd Candidate::Simulate(const Eigen::VectorXd& x, const GapRecord& record) const {
   EffectSimulationOptions options;
   options.substeps = substeps_;
-  if (kind_ == EffectKind::kOutputQuantization) {
+  std::vector<Effect> effects = Effects(x);
+  // Quantisation is applied last, as a smoothed staircase (below).
+  double q = 0, s = 0;
+  for (size_t i = 0; i < spec_.kinds.size(); ++i)
+    if (spec_.kinds[i] == EffectKind::kOutputQuantization) {
+      q = spec_.fixed[i].at(0);
+      s = q * std::exp(std::clamp(x(block_start_[i]), -12.0, 3.0));
+    }
+  effects.erase(std::remove_if(effects.begin(), effects.end(),
+                               [](const Effect& e) { return e.kind == EffectKind::kOutputQuantization; }),
+                effects.end());
+  const double du = InputOffset(x);
+  const Eigen::VectorXd u = du != 0 ? Eigen::VectorXd(record.u.array() + du) : record.u;
+  Eigen::VectorXd y = SimulateWithEffects(Plant(x), effects, u, record.sample_time, options);
+  if (q > 0) {
     // The best predictor of q·round((y + n)/q) when noise n ~ N(0, s²) enters before the
     // rounding is its conditional mean, a staircase smoothed by s (s → 0: the staircase).
-    const double q = fixed_.at(0), s = q * std::exp(std::clamp(x(x.size() - 1), -12.0, 3.0));
-    Eigen::VectorXd y = SimulateWithEffect(Plant(x), Effect{}, record.u, record.sample_time, options);
     const int reach = static_cast<int>(std::ceil(5 * s / q)) + 1;
     for (long k = 0; k < y.size(); ++k) {
       const double m = std::round(y(k) / q);
@@ -140,9 +204,43 @@ Eigen::VectorXd Candidate::Simulate(const Eigen::VectorXd& x, const GapRecord& r
       // Levels beyond the reach carry < 1e-6 of the probability.
       y(k) = q * mean;
     }
-    return y;
   }
-  return SimulateWithEffect(Plant(x), EffectOf(x), record.u, record.sample_time, options);
+  return y;
+}
+
+// Nuisance parameters by variable projection (Golub–Pereyra): the output offset and the free
+// initial state enter the prediction linearly, ŷ = ŷ_sim + b·1 + F(θ)·x0 on each segment
+// (F = the sampled plant's free response C A^k), so for given θ, φ they are the least-squares
+// solution, eliminated from the nonlinear fit. With `segment` > 0 every segment of that many
+// samples gets its own state (multiple shooting without continuity constraints).
+Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& record,
+                                   Nuisance* nuisance) const {
+  Eigen::VectorXd y = Simulate(x, record);
+  if (!y.allFinite()) return y;
+  const long first = record.score_from, total = record.y.size() - first;
+  const long segments = spec_.segment > 0 ? std::max<long>(1, total / spec_.segment) : 1;
+  const long longest = (total + segments - 1) / segments;
+  TransferFunction linear = Plant(x);
+  for (const Effect& e : Effects(x))
+    if (IsLinearEffect(e.kind)) linear = ApplyLinearEffect(linear, e);
+  const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(linear, record.sample_time, longest)
+                                                : Eigen::MatrixXd(longest, 0);
+  for (long j = 0; j < segments; ++j) {
+    const long start = first + j * total / segments, len = first + (j + 1) * total / segments - start;
+    Eigen::MatrixXd m(len, 1 + free.cols());
+    m.col(0).setOnes();
+    if (free.cols() > 0) m.rightCols(free.cols()) = free.topRows(len);
+    const Eigen::VectorXd r = record.y.segment(start, len) - y.segment(start, len);
+    const Eigen::VectorXd coef = m.colPivHouseholderQr().solve(r);
+    if (coef.allFinite()) y.segment(start, len) += m * coef;
+    if (nuisance && j == 0) {
+      nuisance->output_offset = coef(0);
+      nuisance->initial_state_rms =
+          free.cols() > 0 ? coef.tail(free.cols()).norm() / std::sqrt(double(free.cols())) : 0.0;
+    }
+  }
+  if (nuisance) nuisance->input_offset = InputOffset(x);
+  return y;
 }
 
 void Residuals::operator()(const Eigen::VectorXd& x, Eigen::VectorXd& r) const {
@@ -152,7 +250,7 @@ void Residuals::operator()(const Eigen::VectorXd& x, Eigen::VectorXd& r) const {
     Eigen::VectorXd y_hat;
     bool ok = true;
     try {
-      y_hat = candidate->Simulate(x, rec);
+      y_hat = candidate->Predict(x, rec);
     } catch (const std::exception&) {
       ok = false;  // an invalid parameter set (e.g. a non-finite pole): a large residual
     }
@@ -271,80 +369,206 @@ double QuantisationStep(const std::vector<GapRecord>& records, double* strength)
   return refined;
 }
 
-void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w) {
-  const TransferFunction& g0 = *ctx.g0;
-  const std::vector<GapRecord>& estimation = *ctx.estimation;
-  const std::vector<GapRecord>& validation = *ctx.validation;
+CandidateSpec SpecFor(const FitContext& ctx, std::vector<EffectKind> kinds,
+                      std::vector<std::vector<double>> fixed) {
+  CandidateSpec spec = ctx.nuisance;
+  spec.kinds = std::move(kinds);
+  spec.fixed = std::move(fixed);
+  spec.fixed.resize(spec.kinds.size());
+  // An actuator offset is a separate parameter only where it is not an output offset in
+  // disguise: with a nonlinear effect (it moves the operating point on the nonlinearity), or on
+  // an integrating plant (it makes a ramp). Before a linear stable plant, du ≡ b/G0(0).
+  // Coulomb friction does not see it either: a constant du only shifts the output (sign(ẏ)
+  // does not depend on it).
+  bool nonlinear = false;
+  for (EffectKind k : spec.kinds)
+    if (k != EffectKind::kNone && k != EffectKind::kParameterMismatch && !IsLinearEffect(k) &&
+        k != EffectKind::kCoulombFriction)
+      nonlinear = true;
+  spec.input_offset = ctx.integrating || nonlinear;
+  return spec;
+}
+
+void FitSpec(const FitContext& ctx, const CandidateSpec& spec,
+             const std::vector<Eigen::VectorXd>& prefixes,
+             const std::vector<std::vector<double>>& starts, CandidateWork& w) {
   const GapOptions& options = *ctx.options;
-  const Scales& scales = ctx.scales;
-  const long n_est = ctx.n_est;
-  const double q_step = ctx.q_step, q_strength = ctx.q_strength;
-  const Eigen::VectorXd& refit_x = ctx.refit_fit.x;
-  const Eigen::VectorXd zero_plant = Eigen::VectorXd::Zero(ctx.refit_size);
+  Candidate cand(*ctx.g0, spec, ctx.scales, options.substeps);
+  Residuals residuals{&cand, ctx.estimation, ctx.n_est};
+  const size_t last = cand.Blocks() - 1;
+  FitOutcome best;
+  int evaluations = 0;
+  for (const Eigen::VectorXd& prefix : prefixes)
+    for (const auto& start : starts) {
+      Eigen::VectorXd x0 = Eigen::VectorXd::Zero(cand.Size());
+      x0.head(std::min<long>(prefix.size(), cand.BlockStart(last))) =
+          prefix.head(std::min<long>(prefix.size(), cand.BlockStart(last)));
+      if (cand.BlockSize(last) > 0) x0.segment(cand.BlockStart(last), cand.BlockSize(last)) = cand.Phi(last, start);
+      FitOutcome f = Minimise(residuals, x0, options.evaluations_per_start * (cand.Size() + 1));
+      evaluations += f.evaluations;
+      if (!(f.mse >= best.mse)) best = f;  // also takes the first (best.mse is NaN)
+    }
+  FitOutcome polished = Minimise(residuals, best.x, options.evaluations_polish * (cand.Size() + 1));
+  evaluations += polished.evaluations;
+  if (polished.mse < best.mse) best = polished;
   CandidateFit& c = w.fit;
+  c.effect = cand.EffectOf(best.x);
+  c.effects = cand.Effects(best.x);
+  c.plant = cand.Plant(best.x);
+  c.parameters = cand.Size();
+  c.estimation_mse = best.mse;
+  Nuisance nuisance;
+  cand.Predict(best.x, ctx.estimation->front(), &nuisance);
+  c.input_offset = nuisance.input_offset;
+  c.input_offset_fitted = spec.input_offset;
+  for (const GapRecord& r : *ctx.estimation) {
+    cand.Predict(best.x, r, &nuisance);
+    c.output_offsets.push_back(nuisance.output_offset);
+  }
+  w.x = best.x;
+  w.spec = spec;
+  w.y_val = Stack(*ctx.validation, [&](const GapRecord& r) { return cand.Predict(best.x, r); });
+  // Linearised 1σ of the effect parameters: σ̂²(JᵀJ)⁻¹ in φ, mapped through dp/dφ.
+  c.effects_std.clear();
+  if (cand.EffectParams() > 0 || cand.NuisanceParams() > 0) {
+    int calls = 0;
+    LmFunctor functor{residuals, cand.Size(), &calls};
+    Eigen::NumericalDiff<LmFunctor> numeric(functor);
+    Eigen::MatrixXd jac(ctx.n_est, cand.Size());
+    numeric.df(best.x, jac);
+    evaluations += calls;
+    const Eigen::MatrixXd cov =
+        best.mse * (jac.transpose() * jac).completeOrthogonalDecomposition().pseudoInverse();
+    if (cand.NuisanceParams() > 0) {
+      const int col = cand.PlantParams();
+      const double t = std::tanh(best.x(col));
+      c.input_offset_std = std::sqrt(std::max(0.0, cov(col, col))) * (1 - t * t) * ctx.scales.u_max;
+    }
+    for (int b = 0; b < cand.Blocks(); ++b) {
+      const EffectKind kind = spec.kinds[b];
+      if (kind == EffectKind::kNone || kind == EffectKind::kParameterMismatch) continue;
+      std::vector<double> sd_out(EffectParameterNames(kind).size(), kNan);
+      for (int j = 0; j < cand.BlockSize(b); ++j) {
+        const int col = cand.BlockStart(b) + j;
+        Eigen::VectorXd bumped = best.x;
+        const double h = 1e-6 * std::max(1.0, std::abs(bumped(col)));
+        bumped(col) += h;
+        const Effect lo = cand.EffectAt(best.x, b), hi = cand.EffectAt(bumped, b);
+        const double sd = std::sqrt(std::max(0.0, cov(col, col)));
+        for (size_t p = 0; p < lo.params.size(); ++p) {
+          const double dp = (hi.params[p] - lo.params[p]) / h;
+          if (dp != 0) sd_out[p] = std::abs(dp) * sd;
+        }
+      }
+      c.effects_std.push_back(sd_out);
+    }
+  }
+  while (c.effects_std.size() < c.effects.size())
+    c.effects_std.push_back(std::vector<double>(EffectParameterNames(c.effects[c.effects_std.size()].kind).size(), kNan));
+  c.param_std = c.effects_std.empty() ? std::vector<double>{} : c.effects_std.front();
+  c.evaluations += evaluations;
+}
+
+std::vector<std::vector<double>> LinearStarts(const FitContext& ctx, EffectKind kind,
+                                              const Candidate& base, const Eigen::VectorXd& x) {
+  if (kind != EffectKind::kCubicStiffness && kind != EffectKind::kCoulombFriction &&
+      kind != EffectKind::kSensorNonlinearity)
+    return {};
+  const TransferFunction plant = base.Plant(x);
+  EffectSimulationOptions sim;
+  sim.substeps = 1;
+  std::vector<Eigen::VectorXd> columns_e, columns_a, columns_b;
+  for (const GapRecord& r : *ctx.estimation) {
+    Nuisance nu;
+    const Eigen::VectorXd y_hat = base.Predict(x, r, &nu);
+    const long first = r.score_from, n = r.y.size() - first;
+    const Eigen::VectorXd e = (r.y - y_hat).tail(n);
+    Eigen::VectorXd a, b;
+    if (kind == EffectKind::kCubicStiffness) {
+      // u_eff = u − k3 y³ ⇒ y − G u ≈ −k3·G(y³) (measured y, its offset removed).
+      const Eigen::VectorXd yc = r.y.array() - nu.output_offset;
+      a = SimulateWithEffect(plant, Effect{}, yc.array().cube().matrix(), r.sample_time, sim).tail(n);
+      a = -a;
+    } else if (kind == EffectKind::kCoulombFriction) {
+      // u_eff = u − F_c sign(ẏ) ⇒ y − G u ≈ −F_c·G(sign(dŷ/dt)) (velocity of the base prediction).
+      Eigen::VectorXd s(r.y.size());
+      for (long k = 0; k < s.size(); ++k) {
+        const double v = y_hat(std::min<long>(k + 1, s.size() - 1)) - y_hat(std::max<long>(k - 1, 0));
+        s(k) = v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
+      }
+      a = -SimulateWithEffect(plant, Effect{}, s, r.sample_time, sim).tail(n);
+    } else {
+      // y_m = y + a2 y² + a3 y³ about the base prediction (its offset removed).
+      const Eigen::VectorXd yc = (y_hat.array() - nu.output_offset).tail(n);
+      a = yc.array().square();
+      b = yc.array().cube();
+    }
+    columns_e.push_back(e);
+    columns_a.push_back(a);
+    if (b.size()) columns_b.push_back(b);
+  }
+  long total = 0;
+  for (const auto& e : columns_e) total += e.size();
+  const int cols = columns_b.empty() ? 1 : 2;
+  Eigen::MatrixXd m(total, cols + 1);
+  Eigen::VectorXd rhs(total);
+  long off = 0;
+  for (size_t i = 0; i < columns_e.size(); ++i) {
+    const long n = columns_e[i].size();
+    rhs.segment(off, n) = columns_e[i];
+    m.block(off, 0, n, 1) = columns_a[i];
+    if (cols == 2) m.block(off, 1, n, 1) = columns_b[i];
+    m.block(off, cols, n, 1).setOnes();
+    off += n;
+  }
+  const Eigen::VectorXd coef = m.colPivHouseholderQr().solve(rhs);
+  if (!coef.allFinite()) return {};
+  switch (kind) {
+    case EffectKind::kCubicStiffness: return {{coef(0)}, {0.5 * coef(0)}};
+    case EffectKind::kCoulombFriction:
+      if (coef(0) > 0) return {{coef(0)}, {0.5 * coef(0)}};
+      return {};
+    default: return {{1.0, coef(0), coef(1), 0.0}};
+  }
+}
+
+void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w) {
+  const std::vector<GapRecord>& estimation = *ctx.estimation;
+  (void)estimation;
   // Sub-variants fixed before the fit: |y| for the sensor, the step for quantisation.
   std::vector<std::vector<double>> variants = {{}};
   if (kind == EffectKind::kSensorNonlinearity) variants = {{}, {1.0}};
-  if (kind == EffectKind::kOutputQuantization) variants = {{q_step}};
+  if (kind == EffectKind::kOutputQuantization) variants = {{ctx.q_step}};
+  // The refit as a base for the linear-in-parameters starts.
+  const CandidateSpec refit_spec = SpecFor(ctx, {EffectKind::kParameterMismatch});
+  const Candidate refit(*ctx.g0, refit_spec, ctx.scales, ctx.options->substeps);
   double best_criterion = std::numeric_limits<double>::infinity();
+  int evaluations = 0;
   for (const auto& fixed : variants) {
-    Candidate cand(g0, kind, true, scales, options.substeps, fixed);
-    Residuals residuals{&cand, &estimation, n_est};
-    FitOutcome best;
-    int evaluations = 0;
+    const CandidateSpec spec = SpecFor(ctx, {kind}, {fixed});
     // Starts: the plant as given (right when the effect is the whole gap) and as refitted
     // (which has already absorbed what a linear refit can), times the effect's starts.
-    for (const Eigen::VectorXd* plant_start : {&refit_x, &zero_plant})
-      for (const auto& start : Starts(kind, scales)) {
-        Eigen::VectorXd x0(cand.Size());
-        x0.head(cand.PlantParams()) = *plant_start;
-        if (cand.EffectParams() > 0) x0.tail(cand.EffectParams()) = cand.Phi(start);
-        FitOutcome f = Minimise(residuals, x0, options.evaluations_per_start * (cand.Size() + 1));
-        evaluations += f.evaluations;
-        if (!(f.mse >= best.mse)) best = f;  // also takes the first (best.mse is NaN)
-      }
-    FitOutcome polished =
-        Minimise(residuals, best.x, options.evaluations_polish * (cand.Size() + 1));
-    evaluations += polished.evaluations;
-    if (polished.mse < best.mse) best = polished;
-    const double criterion = n_est * std::log(best.mse) + cand.Size() * std::log(double(n_est));
+    Eigen::VectorXd from_refit = Eigen::VectorXd::Zero(ctx.refit_size + (spec.input_offset ? 1 : 0));
+    from_refit.head(ctx.refit_fit.x.size()) = ctx.refit_fit.x;
+    const Eigen::VectorXd from_g0 = Eigen::VectorXd::Zero(from_refit.size());
+    std::vector<std::vector<double>> starts = Starts(kind, ctx.scales);
+    if (fixed.empty()) {
+      const auto linear = LinearStarts(ctx, kind, refit, ctx.refit_fit.x);
+      starts.insert(starts.begin(), linear.begin(), linear.end());
+    }
+    CandidateWork trial;
+    FitSpec(ctx, spec, {from_refit, from_g0}, starts, trial);
+    evaluations += trial.fit.evaluations;
+    const double criterion = ctx.n_est * std::log(trial.fit.estimation_mse) +
+                             trial.fit.parameters * std::log(double(ctx.n_est));
     if (criterion < best_criterion) {
       best_criterion = criterion;
-      c.effect = cand.EffectOf(best.x);
-      c.plant = cand.Plant(best.x);
-      c.parameters = cand.Size();
-      c.estimation_mse = best.mse;
-      w.y_val = Stack(validation, [&](const GapRecord& r) { return cand.Simulate(best.x, r); });
-      // Linearised 1σ of the effect parameters: σ̂²(JᵀJ)⁻¹ in φ, mapped through dp/dφ.
-      c.param_std.assign(EffectParameterNames(kind).size(), kNan);
-      if (cand.EffectParams() > 0) {
-        int calls = 0;
-        LmFunctor functor{residuals, cand.Size(), &calls};
-        Eigen::NumericalDiff<LmFunctor> numeric(functor);
-        Eigen::MatrixXd jac(n_est, cand.Size());
-        numeric.df(best.x, jac);
-        evaluations += calls;
-        const Eigen::MatrixXd info = jac.transpose() * jac;
-        const Eigen::MatrixXd cov =
-            best.mse * info.completeOrthogonalDecomposition().pseudoInverse();
-        for (int j = 0; j < cand.EffectParams(); ++j) {
-          const int col = cand.PlantParams() + j;
-          Eigen::VectorXd bumped = best.x;
-          const double h = 1e-6 * std::max(1.0, std::abs(bumped(col)));
-          bumped(col) += h;
-          const Effect lo = cand.EffectOf(best.x), hi = cand.EffectOf(bumped);
-          const double sd = std::sqrt(std::max(0.0, cov(col, col)));
-          for (size_t p = 0; p < lo.params.size(); ++p) {
-            const double dp = (hi.params[p] - lo.params[p]) / h;
-            if (dp != 0) c.param_std[p] = std::abs(dp) * sd;
-          }
-        }
-      }
+      w = trial;
     }
-    c.evaluations += evaluations;
   }
+  w.fit.evaluations = evaluations;
   if (kind == EffectKind::kOutputQuantization)
-    c.note = "step from the samples' lattice, strength R = " + std::to_string(q_strength);
+    w.fit.note = "step from the samples' lattice, strength R = " + std::to_string(ctx.q_strength);
 }
 
 }  // namespace idrig::gap_detail

@@ -178,16 +178,26 @@ double SensorMap(double y, const std::vector<double>& p) {
 
 EffectSimulator::EffectSimulator(const TransferFunction& plant, const Effect& effect,
                                  double sample_time, const EffectSimulationOptions& options)
-    : effect_(effect) {
+    : EffectSimulator(plant, std::vector<Effect>{effect}, sample_time, options) {}
+
+EffectSimulator::EffectSimulator(const TransferFunction& plant, const std::vector<Effect>& effects,
+                                 double sample_time, const EffectSimulationOptions& options)
+    : effects_(effects) {
   Validate(plant);
-  ValidateEffect(effect);
+  if (effects_.empty()) effects_.push_back(Effect{});
+  for (const Effect& e : effects_) ValidateEffect(e);
   if (plant.IsDiscrete()) Fail("effect simulation needs a continuous plant");
   if (!(sample_time > 0.0)) Fail("effect simulation: sample time must be positive");
   if (options.substeps < 1) Fail("effect simulation: substeps must be >= 1");
-  feedback_ = IsFeedbackEffect(effect.kind);
+  // The linear effects fold into the plant, in series (their order does not matter).
+  TransferFunction linear = plant;
+  for (const Effect& e : effects_) {
+    if (IsLinearEffect(e.kind)) linear = ApplyLinearEffect(linear, e);
+    if (IsFeedbackEffect(e.kind)) feedback_ = true;
+  }
   if (feedback_) {
     // Friction and cubic stiffness act in feedback: u_eff depends on the plant's own state.
-    TransferFunction undelayed = Normalized(plant);
+    TransferFunction undelayed = Normalized(linear);
     undelayed.delay_s = 0.0;
     const StateSpace c = ToStateSpace(undelayed);
     substeps_ = options.substeps;
@@ -198,9 +208,9 @@ EffectSimulator::EffectSimulator(const TransferFunction& plant, const Effect& ef
     D_ = p.D;
     velocity_row_ = c.C.row(0) * c.A;
     velocity_input_ = (c.C.row(0) * c.B.col(0))(0, 0);
-    delay_ = std::lround(plant.delay_s / sample_time);
+    delay_ = std::lround(linear.delay_s / sample_time);
   } else {
-    const SampledPlant p = Sample(ApplyLinearEffect(plant, effect), sample_time);
+    const SampledPlant p = Sample(linear, sample_time);
     A_ = p.A;
     B_ = p.B;
     C_ = p.C;
@@ -215,20 +225,22 @@ void EffectSimulator::Reset() {
   next_ = Eigen::VectorXd::Zero(A_.rows());
   delay_line_.assign(delay_, 0.0);
   delay_head_ = 0;
-  backlash_ = 0.0;
+  backlash_.assign(effects_.size(), 0.0);
 }
 
 double EffectSimulator::Step(double u) {
-  const auto& p = effect_.params;
-  // Input side: static maps and the play operator.
-  switch (effect_.kind) {
-    case EffectKind::kInputSaturation: u = std::clamp(u, p[0], p[1]); break;
-    case EffectKind::kDeadZone: u = DeadZone(u, p[0]); break;
-    case EffectKind::kBacklash:
-      backlash_ = std::max(u - p[0], std::min(u + p[0], backlash_));
-      u = backlash_;
-      break;
-    default: break;
+  // Input side: static maps and the play operator, in the order given.
+  for (size_t i = 0; i < effects_.size(); ++i) {
+    const auto& p = effects_[i].params;
+    switch (effects_[i].kind) {
+      case EffectKind::kInputSaturation: u = std::clamp(u, p[0], p[1]); break;
+      case EffectKind::kDeadZone: u = DeadZone(u, p[0]); break;
+      case EffectKind::kBacklash:
+        backlash_[i] = std::max(u - p[0], std::min(u + p[0], backlash_[i]));
+        u = backlash_[i];
+        break;
+      default: break;
+    }
   }
   // Whole-sample delay (a fractional part is in the sampled plant).
   if (delay_ > 0) {
@@ -239,16 +251,17 @@ double EffectSimulator::Step(double u) {
   }
   double y;
   if (feedback_) {
-    const double gain = p[0];
     y = 0.0;
     for (int j = 0; j < substeps_; ++j) {
-      double u_eff;
-      if (effect_.kind == EffectKind::kCoulombFriction) {
-        const double velocity = velocity_row_.dot(x_) + velocity_input_ * u;  // dy/dt
-        u_eff = u - gain * Sign(velocity);
-      } else {
-        const double position = C_.dot(x_) + D_ * u;
-        u_eff = u - gain * position * position * position;
+      double u_eff = u;
+      for (const Effect& e : effects_) {
+        if (e.kind == EffectKind::kCoulombFriction) {
+          const double velocity = velocity_row_.dot(x_) + velocity_input_ * u;  // dy/dt
+          u_eff -= e.params[0] * Sign(velocity);
+        } else if (e.kind == EffectKind::kCubicStiffness) {
+          const double position = C_.dot(x_) + D_ * u;
+          u_eff -= e.params[0] * position * position * position;
+        }
       }
       if (j == 0) y = C_.dot(x_) + D_ * u_eff;
       next_.noalias() = A_ * x_;
@@ -261,20 +274,30 @@ double EffectSimulator::Step(double u) {
     next_ += B_ * u;
     x_.swap(next_);
   }
-  // Output side.
-  switch (effect_.kind) {
-    case EffectKind::kOutputSaturation: return std::clamp(y, p[0], p[1]);
-    case EffectKind::kSensorNonlinearity: return SensorMap(y, p);
-    case EffectKind::kOutputQuantization: return p[0] * std::round(y / p[0]);
-    default: return y;
+  // Output side, in the order given.
+  for (const Effect& e : effects_) {
+    const auto& p = e.params;
+    switch (e.kind) {
+      case EffectKind::kOutputSaturation: y = std::clamp(y, p[0], p[1]); break;
+      case EffectKind::kSensorNonlinearity: y = SensorMap(y, p); break;
+      case EffectKind::kOutputQuantization: y = p[0] * std::round(y / p[0]); break;
+      default: break;
+    }
   }
+  return y;
 }
 
 Eigen::VectorXd SimulateWithEffect(const TransferFunction& plant, const Effect& effect,
                                    const Eigen::VectorXd& u, double sample_time,
                                    const EffectSimulationOptions& options) {
+  return SimulateWithEffects(plant, std::vector<Effect>{effect}, u, sample_time, options);
+}
+
+Eigen::VectorXd SimulateWithEffects(const TransferFunction& plant, const std::vector<Effect>& effects,
+                                    const Eigen::VectorXd& u, double sample_time,
+                                    const EffectSimulationOptions& options) {
   if (!u.allFinite()) Fail("effect simulation: input contains NaN or Inf");
-  EffectSimulator simulator(plant, effect, sample_time, options);
+  EffectSimulator simulator(plant, effects, sample_time, options);
   Eigen::VectorXd y(u.size());
   for (long k = 0; k < u.size(); ++k) {
     y(k) = simulator.Step(u(k));

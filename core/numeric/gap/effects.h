@@ -81,12 +81,18 @@ class EffectSimulator {
   // Throws std::invalid_argument for a discrete plant, bad parameters or sample time.
   EffectSimulator(const TransferFunction& plant, const Effect& effect, double sample_time,
                   const EffectSimulationOptions& options = {});
+  // Several effects at once (two-effect diagnosis, combined rig effects): input-side maps in the
+  // order given, linear effects folded into the plant in series, the feedback terms summed,
+  // output-side maps in the order given.
+  EffectSimulator(const TransferFunction& plant, const std::vector<Effect>& effects,
+                  double sample_time, const EffectSimulationOptions& options = {});
   double Step(double u);
   void Reset();
-  const Effect& effect() const { return effect_; }
+  const Effect& effect() const { return effects_.front(); }
+  const std::vector<Effect>& effects() const { return effects_; }
 
  private:
-  Effect effect_;
+  std::vector<Effect> effects_;
   bool feedback_ = false;
   int substeps_ = 1;
   Eigen::MatrixXd A_;
@@ -96,7 +102,7 @@ class EffectSimulator {
   long delay_ = 0;
   std::vector<double> delay_line_;
   long delay_head_ = 0;
-  double backlash_ = 0.0;
+  std::vector<double> backlash_;  // play-operator state per effect (used by backlash)
 };
 
 // Output of the plant with the effect for input samples u (Ts apart, plant at rest at k = 0).
@@ -104,6 +110,11 @@ class EffectSimulator {
 Eigen::VectorXd SimulateWithEffect(const TransferFunction& plant, const Effect& effect,
                                    const Eigen::VectorXd& u, double sample_time,
                                    const EffectSimulationOptions& options = {});
+
+// The same with several effects (see EffectSimulator).
+Eigen::VectorXd SimulateWithEffects(const TransferFunction& plant, const std::vector<Effect>& effects,
+                                    const Eigen::VectorXd& u, double sample_time,
+                                    const EffectSimulationOptions& options = {});
 
 // The static and hysteretic maps, exposed for tests and for the diagnosis's signatures.
 double DeadZone(double u, double width);

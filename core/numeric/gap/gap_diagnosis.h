@@ -47,6 +47,7 @@ struct GapOptions {
   int evaluations_polish = 80;      // LM budget for the best start, ×(parameters + 1)
   std::vector<EffectKind> candidates;  // empty: every effect of the library
   int threads = 0;               // candidates fitted in parallel; 0: one per hardware thread
+  bool second_effect = true;     // forward selection of a second effect after the first
 };
 
 struct BandGap {
@@ -79,6 +80,7 @@ struct GapWhere {
   double noise_nrmse = 0;        // noise floor as NRMSE (noise_floor.sigma / spread of y_val)
   NoiseFloor noise_floor;        // how the floor was estimated (without the candidates)
   DetectionLines detection_lines;  // even/odd lines of a periodic odd multisine (if any)
+  OutputLattice lattice;         // the lattice the output samples sit on (quantisation)
   double gap_to_noise = 0;       // RMS(y − ŷ0) / σ̂
   bool gap_significant = false;
   bool residual_white = false, residual_independent = false;  // tests on y − ŷ0
@@ -102,8 +104,24 @@ struct CandidateFit {
   double signature = 0;          // corr(ŷ_c − ŷ_0, y − ŷ_0) on validation data
   bool eligible = false;         // may be the verdict
   std::vector<double> param_std; // 1σ of effect parameters (linearised), NaN when unknown
+  std::vector<Effect> effects;   // every effect of the candidate (one, or two after selection)
+  std::vector<std::vector<double>> effects_std;  // their 1σ
+  double input_offset = 0, input_offset_std = 0;  // fitted actuator offset du (u units)
+  bool input_offset_fitted = false;
+  std::vector<double> output_offsets;             // per estimation record (first segment)
   int evaluations = 0;
   std::string note;
+};
+
+// Nuisance parameters every candidate carries (never named as an effect): an actuator offset
+// du (u → u + du; fitted where it is not an output offset in disguise), an output offset per
+// record (per segment) and a free initial state per record (per segment), the latter two by
+// variable projection.
+struct GapNuisance {
+  double input_offset = 0, input_offset_std = 0;
+  bool input_offset_fitted = false;
+  std::vector<double> output_offset;  // per estimation record
+  std::string initial_state;          // how the initial state was treated
 };
 
 struct GapVerdict {
@@ -118,6 +136,11 @@ struct GapVerdict {
   Effect params;
   std::vector<double> param_std;
   TransferFunction plant;        // the adjusted linear part
+  std::vector<Effect> effects;   // one or two effects (the first is `params`); empty for none
+  std::vector<std::vector<double>> effects_std;
+  GapNuisance nuisance;
+  std::string fit_scheme;        // "single_shooting" or "multiple_shooting"
+  long shooting_segment = 0;     // samples per segment when multiple shooting
   std::string explanation;
 };
 

@@ -26,43 +26,71 @@ struct Scales {
   double y_quantile[4] = {0, 0, 0, 0};     // 0.5, 2, 98, 99.5 %
 };
 
-// One candidate: the plant's free coefficients θ (log multipliers) and the effect's φ.
+// What a candidate contains: 0–2 effects (kNone / kParameterMismatch carry no parameters), each
+// with its fixed sub-variant (|y| for the sensor, the step for quantisation), whether G0's
+// coefficients move, and the nuisance parameters every candidate has.
+struct CandidateSpec {
+  std::vector<EffectKind> kinds;
+  std::vector<std::vector<double>> fixed;  // per kind (may be shorter: empty)
+  bool fit_plant = true;
+  bool input_offset = false;  // an actuator offset du (fitted by LM): u → u + du
+  bool free_state = true;     // output offset and free initial state by variable projection
+  long segment = 0;           // samples per shooting segment (own state each); 0: whole record
+};
+
+struct Nuisance {
+  double input_offset = 0, output_offset = 0;  // du, and b of the first segment
+  double initial_state_rms = 0;                // RMS of the first segment's x0 (realisation units)
+};
+
+// One candidate: x = [θ (plant log multipliers) | du | φ_1 | φ_2].
 class Candidate {
  public:
-  Candidate(const TransferFunction& base, EffectKind kind, bool fit_plant, const Scales& scales,
-            int substeps, std::vector<double> fixed = {});
+  Candidate(const TransferFunction& base, const CandidateSpec& spec, const Scales& scales,
+            int substeps);
 
   static int NumEffectParams(EffectKind kind, const std::vector<double>& fixed);
 
   int PlantParams() const {
     return static_cast<int>(free_den_.size() + free_num_.size()) + (gain_only_ ? 1 : 0);
   }
+  int NuisanceParams() const { return spec_.input_offset ? 1 : 0; }
   // Only the plant's gain moves (one multiplier on num): a gap that is a pure gain change.
   void SetGainOnly() {
     free_den_.clear();
     free_num_.clear();
     gain_only_ = true;
+    block_start_.assign(block_start_.size(), PlantParams() + NuisanceParams());
   }
   int EffectParams() const { return effect_params_; }
-  int Size() const { return PlantParams() + EffectParams(); }
+  int Blocks() const { return static_cast<int>(spec_.kinds.size()); }
+  int BlockStart(size_t i) const { return block_start_[i]; }
+  int BlockSize(size_t i) const { return block_size_[i]; }
+  int Size() const { return PlantParams() + NuisanceParams() + EffectParams(); }
+  const CandidateSpec& spec() const { return spec_; }
 
   TransferFunction Plant(const Eigen::VectorXd& x) const;
-  // φ → physical parameters, in EffectParameterNames order.
+  double InputOffset(const Eigen::VectorXd& x) const;
+  // φ → physical parameters, in EffectParameterNames order: block i, the first, all real ones.
+  Effect EffectAt(const Eigen::VectorXd& x, size_t i) const;
   Effect EffectOf(const Eigen::VectorXd& x) const;
-  // Inverse of EffectOf for the effect part, for starting points given in physical units.
-  Eigen::VectorXd Phi(const std::vector<double>& p) const;
+  std::vector<Effect> Effects(const Eigen::VectorXd& x) const;
+  // Inverse of EffectAt for block i, for starting points given in physical units.
+  Eigen::VectorXd Phi(size_t i, const std::vector<double>& p) const;
+  // The plant with its effects and input offset, from rest (no output nuisance).
   Eigen::VectorXd Simulate(const Eigen::VectorXd& x, const GapRecord& record) const;
-
-  EffectKind kind() const { return kind_; }
+  // Simulate + the output offset and free initial state(s) fitted by least squares.
+  Eigen::VectorXd Predict(const Eigen::VectorXd& x, const GapRecord& record,
+                          Nuisance* nuisance = nullptr) const;
 
  private:
   TransferFunction base_;
-  EffectKind kind_;
+  CandidateSpec spec_;
   Scales scales_;
   int substeps_;
-  std::vector<double> fixed_;
   std::vector<int> free_den_, free_num_;
   bool gain_only_ = false;
+  std::vector<int> block_start_, block_size_;
   int effect_params_ = 0;
 };
 
@@ -118,10 +146,12 @@ double Correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 Eigen::VectorXd Stack(const std::vector<GapRecord>& records,
                       const std::function<Eigen::VectorXd(const GapRecord&)>& f);
 
-// A fitted candidate with its validation simulation (concatenated scored samples).
+// A fitted candidate with its validation prediction (concatenated scored samples).
 struct CandidateWork {
   CandidateFit fit;
   Eigen::VectorXd y_val;
+  Eigen::VectorXd x;             // fitted parameter vector
+  CandidateSpec spec;            // what was fitted
 };
 
 // Everything the candidates share: the data, the scales, G0 and its refit.
@@ -133,20 +163,52 @@ struct FitContext {
   Scales scales;
   long n_est = 0, n_val = 0;
   Eigen::VectorXd y_val, y0_val, y_refit_val;  // measured, G0, refitted G0 on validation
-  double as_is_mse = 0;                         // G0 on estimation
+  double as_is_mse = 0;                         // G0 (with nuisance) on estimation
   FitOutcome refit_fit;                         // refitted G0 (parameter_mismatch)
+  CandidateSpec nuisance;                       // the nuisance setting every candidate shares
+  bool integrating = false;                     // G0 integrates: du in every candidate
   int refit_size = 0;
+  int as_is_size = 0;                           // fitted parameters of `none` (du when integrating)
   double q_step = 0, q_strength = 0;
   int k_effects = 1;                            // effects tested (Bonferroni)
 };
 
-// Fits one effect (not none, not parameter_mismatch) from its starts: fills effect, plant,
-// parameters, estimation_mse, param_std, evaluations, note and the validation simulation.
+// The spec of a candidate with these effects and the context's nuisance setting.
+CandidateSpec SpecFor(const FitContext& ctx, std::vector<EffectKind> kinds,
+                      std::vector<std::vector<double>> fixed = {});
+
+// Fits a candidate: every prefix (θ, du and the earlier blocks' φ, as a fitted x; shorter
+// prefixes are padded with zeros) times every start of the last block (physical units). The
+// best is polished. Fills effect(s), plant, parameters, estimation_mse, the 1σ of every effect
+// block and of du, the output offsets, evaluations, the validation prediction, x and spec.
+void FitSpec(const FitContext& ctx, const CandidateSpec& spec,
+             const std::vector<Eigen::VectorXd>& prefixes,
+             const std::vector<std::vector<double>>& starts, CandidateWork& w);
+
+// Fits one effect (not none, not parameter_mismatch), its variants, from its starts.
 void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w);
+
+// Linear-in-parameters starts of `kind` given a base prediction: the restoring-force idea —
+// what the base model leaves, e = y − ŷ_base, regressed on the base plant driven by the effect's
+// basis (y³ for a cubic spring, sign(dŷ/dt) for friction; ŷ², ŷ³ for a sensor map).
+std::vector<std::vector<double>> LinearStarts(const FitContext& ctx, EffectKind kind,
+                                              const Candidate& base, const Eigen::VectorXd& x);
 
 // ranking.cc: the likelihood-ratio test, validation MSE/NRMSE/BIC and signature of one fitted
 // candidate; then eligibility, ordering and BIC weights over all of them (best first).
 void ScoreCandidate(const FitContext& ctx, CandidateWork& w);
-std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork> work, const GapOptions& options);
+// Sorts `work` best first (eligible, then validation BIC) and returns the ranking.
+std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const GapOptions& options);
+
+// effect_pairs.cc: forward selection of a second effect after `first` (the top single effect),
+// each other effect added to it and refitted together; kept when it passes the significance,
+// signature and validation-BIC rules against `first`. Updates report.verdict.
+void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first,
+                        const std::vector<EffectKind>& kinds, GapReport& report);
+
+// body(i) for i < count on up to `threads` threads (0: hardware); an exception is rethrown as
+// std::invalid_argument naming what(i).
+void ParallelFor(size_t count, int threads, const std::function<void(size_t)>& body,
+                 const std::function<std::string(size_t)>& what);
 
 }  // namespace idrig::gap_detail

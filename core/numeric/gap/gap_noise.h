@@ -84,6 +84,33 @@ struct DetectionLines {
 // or null. Never throws on data that do not qualify: available = false with the reason.
 DetectionLines AnalyseDetectionLines(const std::vector<GapRecord>& records, const TransferFunction* sim);
 
+// The lattice a quantised output sits on (gap_lattice.cc): y ≈ offset + k·step for (nearly)
+// every sample. An ADC puts every reading on its lattice whatever the noise before it, so the
+// test is the share of samples within 5 % of a step of a lattice point (≥ 95 %), not the noise.
+// Whether it matters is physics: the rounding adds q²/12 to the noise variance, so the lattice
+// is called quantisation only when that is a material share of the noise floor,
+// q²/12 ≥ 5 % of σ̂² (q ≳ 0.77 σ̂). A lattice that only the printing of the numbers made (a CSV
+// with few digits: q far below the noise) is not quantisation.
+struct OutputLattice {
+  bool lattice = false;          // the samples sit on a lattice
+  bool detected = false;         // …and it is coarse enough against the noise to matter
+  double step = 0, offset = 0;   // y ≈ offset + k·step (offset in [0, step))
+  double on_lattice = 0;         // share of samples within 0.05·step of a lattice point
+  double resultant = 0;          // |mean exp(2πi y/step)|
+  int levels = 0;                // distinct lattice levels used
+  double noise_share = 0;        // (step²/12) / σ̂²
+  std::string reason;
+};
+// `step`: the candidate step (QuantisationStep); `noise_sigma`: the independent noise floor.
+OutputLattice DetectOutputLattice(const std::vector<GapRecord>& records, double step, double noise_sigma);
+
+struct GapReport;
+// A detected lattice names output_quantization: as the verdict when it was `none` (the
+// quantisation candidate's fit, confidence = the share of samples on the lattice), or as a
+// second effect in verdict.effects when one effect was named and the rounding noise is a material
+// share (≥ 5 %) of what that effect leaves, (q²/12)/(σ̂·after/floor)². Notes say so.
+void NameLatticeQuantisation(const OutputLattice& lattice, double noise_nrmse, GapReport& report);
+
 struct GapVerdict;
 // The verdict's figures against an independent floor (all NRMSE on the validation records):
 // shrink = (before − after)/(before − floor) (0 when before ≤ floor: nothing to explain),

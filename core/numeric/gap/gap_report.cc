@@ -112,7 +112,53 @@ double SlowTimeConstant(const TransferFunction& plant, double ts, double duratio
   return std::clamp(slow, 2 * ts, duration);
 }
 
+// Multiple shooting when G0 integrates or is lightly damped: the slowest mode decays by less
+// than e^-5 over the longest record, so an open-loop simulation from a wrong state (or with a
+// small input bias) drifts. Segments of max(N/8, 100·(n+1)) samples each get a free state;
+// a true integrator (a pole within 1e-6/Ts of 0) also gets an input offset in every candidate.
+void ChooseFitScheme(const TransferFunction& g0, const std::vector<GapRecord>& estimation, double ts,
+                     FitContext& ctx) {
+  long longest = 0;
+  for (const auto& r : estimation) longest = std::max<long>(longest, r.u.size() - r.score_from);
+  const Eigen::VectorXcd p = Poles(g0);
+  double slowest = INFINITY;
+  bool integrator = false;
+  for (int i = 0; i < p.size(); ++i) {
+    slowest = std::min(slowest, -p(i).real());
+    if (std::abs(p(i)) < 1e-6 / ts) integrator = true;
+  }
+  ctx.integrating = integrator;
+  ctx.nuisance = CandidateSpec{};
+  if (p.size() > 0 && slowest * longest * ts < 5.0)
+    ctx.nuisance.segment = std::max<long>(longest / 8, 100 * (g0.Order() + 1));
+  if (ctx.nuisance.segment >= longest) ctx.nuisance.segment = 0;
+}
+
 }  // namespace
+
+void gap_detail::ParallelFor(size_t count, int threads_wanted, const std::function<void(size_t)>& body,
+                 const std::function<std::string(size_t)>& what) {
+  const int threads = std::max(1, std::min<int>(static_cast<int>(count),
+                                                threads_wanted > 0 ? threads_wanted
+                                                                   : static_cast<int>(std::thread::hardware_concurrency())));
+  std::atomic<size_t> next{0};
+  std::vector<std::string> errors(count);
+  auto run = [&] {
+    for (size_t i = next++; i < count; i = next++) {
+      try {
+        body(i);
+      } catch (const std::exception& e) {
+        errors[i] = e.what();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(run);
+  run();
+  for (auto& t : pool) t.join();
+  for (size_t i = 0; i < count; ++i)
+    if (!errors[i].empty()) Fail(what(i) + " failed: " + errors[i]);
+}
 
 TransferFunction SimModelTransferFunction(const LtiModel& model) {
   if (const auto* tf = std::get_if<TransferFunction>(&model)) return *tf;
@@ -211,52 +257,67 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const std::vector<EffectKind> kinds = options.candidates.empty() ? AllEffects() : options.candidates;
   const Eigen::VectorXd y_val = Stack(validation, [](const GapRecord& r) { return r.y; });
 
-  // G0 as given, and G0 refitted (parameter_mismatch): the references for every effect.
-  Candidate as_is(g0, EffectKind::kNone, false, scales, options.substeps);
-  const Eigen::VectorXd no_params(0);
-  const Eigen::VectorXd y0_val =
-      Stack(validation, [&](const GapRecord& r) { return as_is.Simulate(no_params, r); });
-
-  const double as_is_mse = Mse(Residuals{&as_is, &estimation, n_est}, no_params);
-  Candidate refit(g0, EffectKind::kParameterMismatch, true, scales, options.substeps);
-  Residuals refit_residuals{&refit, &estimation, n_est};
-  const FitOutcome refit_fit = Minimise(refit_residuals, Eigen::VectorXd::Zero(refit.Size()),
-                                        options.evaluations_polish * (refit.Size() + 1));
-  const Eigen::VectorXd y_refit_val =
-      Stack(validation, [&](const GapRecord& r) { return refit.Simulate(refit_fit.x, r); });
-
-  const Eigen::VectorXd zero_plant = Eigen::VectorXd::Zero(refit.Size());
-  {
-    // Lag that best aligns G0's output with the measured one (a delay's natural start).
-    const GapRecord& first = estimation.front();
-    const Eigen::VectorXd y0 = as_is.Simulate(no_params, first);
-    const long n = first.y.size();
-    const long max_lag = std::min<long>(n / 4, static_cast<long>(10 * scales.slow / ts) + 1);
-    double best = -INFINITY;
-    for (long lag = 0; lag <= max_lag; ++lag) {
-      const double c = first.y.tail(n - lag).dot(y0.head(n - lag)) / std::sqrt(double(n - lag));
-      if (c > best) best = c, scales.lag_of_best_match = lag * ts;
-    }
-  }
-  double q_strength = 0;
-  const double q_step = QuantisationStep(estimation, &q_strength);
-
   FitContext ctx;
   ctx.g0 = &g0;
   ctx.estimation = &estimation;
   ctx.validation = &validation;
   ctx.options = &options;
-  ctx.scales = scales;
   ctx.n_est = n_est;
   ctx.n_val = n_val;
   ctx.y_val = y_val;
+  ChooseFitScheme(g0, estimation, ts, ctx);
+  GapVerdict& v = report.verdict;
+  v.fit_scheme = ctx.nuisance.segment > 0 ? "multiple_shooting" : "single_shooting";
+  v.shooting_segment = ctx.nuisance.segment;
+  if (ctx.nuisance.segment > 0)
+    report.notes.push_back(
+        "G0 integrates or is lightly damped (slowest decay over the record < e^-5): fitted by "
+        "multiple shooting, a free state per segment of " + std::to_string(ctx.nuisance.segment) +
+        " samples, so that the open-loop simulation cannot drift");
+  v.nuisance.initial_state = ctx.nuisance.segment > 0
+                                 ? "free per segment of " + std::to_string(ctx.nuisance.segment) + " samples (least squares)"
+                                 : "free per record (least squares)";
+
+  // G0 as given (with the nuisance), and G0 refitted (parameter_mismatch): the references.
+  const Candidate as_is(g0, [&] {
+    CandidateSpec spec = SpecFor(ctx, {EffectKind::kNone});
+    spec.fit_plant = false;
+    return spec;
+  }(), scales, options.substeps);
+  const Residuals as_is_residuals{&as_is, &estimation, n_est};
+  const FitOutcome as_is_fit =
+      Minimise(as_is_residuals, Eigen::VectorXd::Zero(as_is.Size()), options.evaluations_polish * (as_is.Size() + 1));
+  const Eigen::VectorXd y0_val =
+      Stack(validation, [&](const GapRecord& r) { return as_is.Predict(as_is_fit.x, r); });
+  const Candidate refit(g0, SpecFor(ctx, {EffectKind::kParameterMismatch}), scales, options.substeps);
+  const Residuals refit_residuals{&refit, &estimation, n_est};
+  Eigen::VectorXd refit_start = Eigen::VectorXd::Zero(refit.Size());
+  if (as_is.Size() > 0) refit_start.tail(as_is.Size()) = as_is_fit.x;  // du
+  const FitOutcome refit_fit =
+      Minimise(refit_residuals, refit_start, options.evaluations_polish * (refit.Size() + 1));
+  const Eigen::VectorXd y_refit_val =
+      Stack(validation, [&](const GapRecord& r) { return refit.Predict(refit_fit.x, r); });
+  {
+    // Lag that best aligns G0's output with the measured one (a delay's natural start).
+    const GapRecord& first = estimation.front();
+    const Eigen::VectorXd y0 = as_is.Predict(as_is_fit.x, first);
+    const long n = first.y.size();
+    const long max_lag = std::min<long>(n / 4, static_cast<long>(10 * scales.slow / ts) + 1);
+    const Eigen::VectorXd yc = first.y.array() - first.y.mean(), y0c = y0.array() - y0.mean();
+    double best = -INFINITY;
+    for (long lag = 0; lag <= max_lag; ++lag) {
+      const double c = yc.tail(n - lag).dot(y0c.head(n - lag)) / std::sqrt(double(n - lag));
+      if (c > best) best = c, scales.lag_of_best_match = lag * ts;
+    }
+  }
+  ctx.scales = scales;
   ctx.y0_val = y0_val;
   ctx.y_refit_val = y_refit_val;
-  ctx.as_is_mse = as_is_mse;
+  ctx.as_is_mse = as_is_fit.mse;
+  ctx.as_is_size = as_is.Size();
   ctx.refit_fit = refit_fit;
   ctx.refit_size = refit.Size();
-  ctx.q_step = q_step;
-  ctx.q_strength = q_strength;
+  ctx.q_step = QuantisationStep(estimation, &ctx.q_strength);
   ctx.k_effects = std::max<int>(1, static_cast<int>(kinds.size()) - 2);
   auto fit_one = [&](EffectKind kind) {
     CandidateWork w;
@@ -264,8 +325,13 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     if (kind == EffectKind::kNone) {
       c.effect.kind = kind;
       c.plant = g0;
-      c.estimation_mse = as_is_mse;
+      c.parameters = as_is.Size();
+      c.estimation_mse = as_is_fit.mse;
+      c.input_offset = as_is.InputOffset(as_is_fit.x);
+      c.input_offset_fitted = as_is.NuisanceParams() > 0;
       w.y_val = y0_val;
+      w.x = as_is_fit.x;
+      w.spec = as_is.spec();
       c.significant = true;
     } else if (kind == EffectKind::kParameterMismatch) {
       c.effect = refit.EffectOf(refit_fit.x);
@@ -273,42 +339,31 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
       c.parameters = refit.Size();
       c.estimation_mse = refit_fit.mse;
       c.evaluations = refit_fit.evaluations;
+      c.input_offset = refit.InputOffset(refit_fit.x);
+      c.input_offset_fitted = refit.NuisanceParams() > 0;
       w.y_val = y_refit_val;
+      w.x = refit_fit.x;
+      w.spec = refit.spec();
     } else {
       FitEffect(ctx, kind, w);
+    }
+    if (c.output_offsets.empty()) {
+      const Candidate& cand = kind == EffectKind::kNone ? as_is : refit;
+      for (const GapRecord& r : estimation) {
+        Nuisance nu;
+        cand.Predict(w.x, r, &nu);
+        c.output_offsets.push_back(nu.output_offset);
+      }
     }
     ScoreCandidate(ctx, w);
     return w;
   };
-  // The candidates are independent: fit them on `threads` threads (results do not depend on
-  // the schedule; each candidate is fitted deterministically).
+  // The candidates are independent: fit them in parallel (results do not depend on the
+  // schedule; each candidate is fitted deterministically).
   std::vector<CandidateWork> work(kinds.size());
-  {
-    const int threads = std::max(1, std::min<int>(static_cast<int>(kinds.size()),
-                                                  options.threads > 0 ? options.threads
-                                                                      : static_cast<int>(std::thread::hardware_concurrency())));
-    std::atomic<size_t> next{0};
-    std::vector<std::string> errors(kinds.size());
-    auto run = [&] {
-      for (size_t i = next++; i < kinds.size(); i = next++) {
-        try {
-          work[i] = fit_one(kinds[i]);
-        } catch (const std::exception& e) {
-          errors[i] = e.what();
-        }
-      }
-    };
-    std::vector<std::thread> pool;
-    for (int t = 1; t < threads; ++t) pool.emplace_back(run);
-    run();
-    for (auto& t : pool) t.join();
-    for (size_t i = 0; i < kinds.size(); ++i)
-      if (!errors[i].empty())
-        throw std::invalid_argument(std::string("gap diagnosis: fitting ") + EffectName(kinds[i]) +
-                                    " failed: " + errors[i]);
-  }
-
-  report.ranking = RankCandidates(std::move(work), options);
+  ParallelFor(kinds.size(), options.threads, [&](size_t i) { work[i] = fit_one(kinds[i]); },
+              [&](size_t i) { return std::string("fitting ") + EffectName(kinds[i]); });
+  report.ranking = RankCandidates(work, options);
 
   // Noise floor, estimated without the candidates (gap_noise.h); records too short for it fall
   // back to the smallest estimation residual among the candidates (said in the method).
@@ -325,16 +380,20 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const double y_val_spread = (y_val.array() - y_val.mean()).matrix().norm() / std::sqrt(double(n_val));
 
   const CandidateFit& top = report.ranking.front();
-  GapVerdict& v = report.verdict;
   v.effect = EffectName(top.effect.kind);
   v.confidence = top.score;
   v.params = top.effect;
   v.param_std = top.param_std;
   v.plant = top.plant;
+  v.effects = top.effects;
+  v.effects_std = top.effects_std;
+  v.nuisance.input_offset = top.input_offset;
+  v.nuisance.input_offset_std = top.input_offset_std;
+  v.nuisance.input_offset_fitted = top.input_offset_fitted;
+  v.nuisance.output_offset = top.output_offsets;
   v.nrmse_before = Nrmse(y_val, y0_val)(0);
   v.nrmse_after = top.nrmse_after;
   const double noise_nrmse = floor.sigma / std::max(y_val_spread, 1e-300);
-  ApplyNoiseFloor(noise_nrmse, v);
   if (report.ranking.size() > 1 && report.ranking[1].eligible &&
       report.ranking[1].bic - top.bic < options.ambiguity_bic) {
     v.effect = "ambiguous";
@@ -344,12 +403,14 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   // saturation as a mere gain: when the gap is a pure gain change, those cannot be told from a
   // parameter mismatch with this data.
   if (v.effect == "parameter_mismatch" && BinaryInput(estimation) && BinaryInput(validation)) {
-    Candidate gain(g0, EffectKind::kParameterMismatch, true, scales, options.substeps);
+    Candidate gain(g0, SpecFor(ctx, {EffectKind::kParameterMismatch}), scales, options.substeps);
     gain.SetGainOnly();
     Residuals gain_residuals{&gain, &estimation, n_est};
-    const FitOutcome gain_fit = Minimise(gain_residuals, Eigen::VectorXd::Zero(1), 200);
+    Eigen::VectorXd gain_start = Eigen::VectorXd::Zero(gain.Size());
+    if (as_is.Size() > 0) gain_start.tail(as_is.Size()) = as_is_fit.x;
+    const FitOutcome gain_fit = Minimise(gain_residuals, gain_start, 200);
     const double lr = n_est * std::log(gain_fit.mse / refit_fit.mse);
-    const int dof = std::max(1, refit.Size() - 1);
+    const int dof = std::max(1, refit.Size() - gain.Size());
     if (lr < ChiSquareQuantile(1 - options.significance, dof)) {
       v.effect = "ambiguous";
       v.tied = {"parameter_mismatch", "dead_zone", "backlash", "input_saturation"};
@@ -361,21 +422,31 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
           "mismatch; excite at several amplitudes to separate them");
     }
   }
+  // A second effect, by forward selection (effect_pairs.cc).
+  if (v.effect != "ambiguous" && top.eligible && !top.effects.empty() && options.second_effect)
+    SelectSecondEffect(ctx, work.front(), kinds, report);
+  std::vector<GapRecord> all_records = estimation;
+  all_records.insert(all_records.end(), validation.begin(), validation.end());
+  const OutputLattice lattice = DetectOutputLattice(all_records, ctx.q_step, floor.sigma);
+  NameLatticeQuantisation(lattice, noise_nrmse, report);
+  ApplyNoiseFloor(noise_nrmse, v);  // after the second effect: nrmse_after is final
   if (v.effect == "none")
     v.explanation = "no candidate explains the gap better than noise: G0 fits within the noise";
   else if (v.effect == "ambiguous")
     v.explanation = "the top candidates (" + v.tied[0] + ", " + v.tied[1] +
                     (v.tied.size() > 2 ? ", …" : "") +
                     ") fit the validation data equally well; more informative data would separate them";
-  else
-    v.explanation = v.effect + " closes " + std::to_string(int(std::round(100 * v.shrink))) +
+  else {
+    std::string named = v.effect;
+    if (v.effects.size() > 1) named += " with " + std::string(EffectName(v.effects[1].kind));
+    v.explanation = named + " closes " + std::to_string(int(std::round(100 * v.shrink))) +
                     " % of the explainable gap on the validation records";
+  }
 
   report.where = LocateGap(g0, validation, floor.sigma);
   report.where.noise_nrmse = noise_nrmse;
   report.where.noise_floor = floor;
-  std::vector<GapRecord> all_records = estimation;
-  all_records.insert(all_records.end(), validation.begin(), validation.end());
+  report.where.lattice = lattice;
   report.where.detection_lines = AnalyseDetectionLines(all_records, &g0);
   return report;
 }

@@ -40,7 +40,7 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
   if (kind != EffectKind::kNone) {
     const double reference = kind == EffectKind::kParameterMismatch ? as_is_mse : ctx.refit_fit.mse;
     const int dof = kind == EffectKind::kParameterMismatch
-                        ? std::max(1, c.parameters)
+                        ? std::max(1, c.parameters - ctx.as_is_size)
                         : std::max(1, c.parameters - ctx.refit_size);
     const double level = kind == EffectKind::kParameterMismatch ? options.significance
                                                                 : options.significance / k_effects;
@@ -60,7 +60,7 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
   }
 }
 
-std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork> work, const GapOptions& options) {
+std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const GapOptions& options) {
   // Eligibility: an effect must beat the refitted G0 significantly and reproduce the gap's
   // signature; parameter_mismatch must beat G0; none is always eligible.
   for (auto& w : work) {

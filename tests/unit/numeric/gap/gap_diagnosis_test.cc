@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "core/numeric/gap/gap_bench.h"
 
@@ -38,6 +39,13 @@ TEST_P(DiagnosisTest, FindsTheWithheldEffectAndClosesTheGapOnValidationData) {
   std::printf("truth %-22s verdict %-22s confidence %.3f NRMSE %.4f -> %.4f shrink %.3f\n",
               EffectName(c.truth), v.effect.c_str(), v.confidence, v.nrmse_before, v.nrmse_after,
               v.shrink);
+  if (std::getenv("GAP_DEBUG")) {
+    for (const auto& r : report.ranking)
+      std::printf("  %-22s nrmse %.4f est_mse %.3g bic %.1f LR %.1f/%.1f sig %.2f elig %d du %.3g\n",
+                  EffectName(r.effect.kind), r.nrmse_after, r.estimation_mse, r.bic, r.likelihood_ratio,
+                  r.lr_threshold, r.signature, r.eligible, r.input_offset);
+    for (const auto& n : report.notes) std::printf("  note: %s\n", n.c_str());
+  }
   EXPECT_EQ(v.effect, EffectName(c.truth));
   if (c.truth != EffectKind::kNone) {
     EXPECT_GE(v.shrink, 0.8);
