@@ -26,6 +26,7 @@ OutputLattice DetectOutputLattice(const std::vector<GapRecord>& records, double 
   // Offset: the mean phase of the samples on the circle of circumference `step`.
   l.offset = step * std::arg(sum) / (2 * M_PI);
   if (l.offset < 0) l.offset += step;
+  if (l.offset > step * (1 - 1e-6)) l.offset = 0;
   long on = 0;
   std::set<long> levels;
   for (const auto& r : records)
