@@ -136,6 +136,10 @@ nlohmann::json GapReportToJson(const GapReport& report) {
       {"initial_state", v.nuisance.initial_state},
   };
   verdict["fit_scheme"] = v.fit_scheme;
+  if (v.linear_order > 0) {
+    verdict["linear_order"] = v.linear_order;
+    verdict["linear_nrmse_after"] = v.linear_nrmse_after;
+  }
   if (v.shooting_segment > 0) verdict["shooting_segment"] = v.shooting_segment;
 
   nlohmann::json ranking = nlohmann::json::array();

@@ -32,7 +32,7 @@ bool Compatible(EffectKind a, EffectKind b) {
 
 }  // namespace
 
-void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first,
+void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
                         const std::vector<EffectKind>& kinds, GapReport& report) {
   const EffectKind k1 = first.spec.kinds.front();
   std::vector<EffectKind> seconds;
@@ -77,7 +77,7 @@ void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first,
   const GapOptions& options = *ctx.options;
   const CandidateFit& one = first.fit;
   const CandidateWork* chosen = nullptr;
-  double chosen_bic = one.bic;
+  double chosen_bic = std::min(one.bic, top_bic);
   for (CandidateWork& w : pairs) {
     CandidateFit& c = w.fit;
     const int dof = std::max(1, c.parameters - one.parameters);
@@ -109,6 +109,7 @@ void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first,
     return;
   }
   const CandidateFit& c = chosen->fit;
+  v.effect = EffectName(k1);
   v.effects = c.effects;
   v.effects_std = c.effects_std;
   v.params = c.effects.front();

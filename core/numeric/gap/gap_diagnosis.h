@@ -48,6 +48,7 @@ struct GapOptions {
   std::vector<EffectKind> candidates;  // empty: every effect of the library
   int threads = 0;               // candidates fitted in parallel; 0: one per hardware thread
   bool second_effect = true;     // forward selection of a second effect after the first
+  bool check_linear_order = true;  // test a higher-order linear part (unmodelled_dynamics)
 };
 
 struct BandGap {
@@ -125,7 +126,10 @@ struct GapNuisance {
 };
 
 struct GapVerdict {
-  std::string effect;            // an effect name, or "ambiguous"
+  // An effect name, "ambiguous", or "unmodelled_dynamics" (the linear part lacks dynamics: a
+  // higher-order linear model beats every single effect; `effects` then holds what a second
+  // diagnosis on that model finds, if any).
+  std::string effect;
   std::vector<std::string> tied; // the two candidates when ambiguous
   double confidence = 0;         // BIC weight of the verdict among all candidates
   double nrmse_before = 0, nrmse_after = 0;  // validation records
@@ -139,6 +143,8 @@ struct GapVerdict {
   std::vector<Effect> effects;   // one or two effects (the first is `params`); empty for none
   std::vector<std::vector<double>> effects_std;
   GapNuisance nuisance;
+  int linear_order = 0;          // unmodelled_dynamics: the order of the linear part that fits
+  double linear_nrmse_after = 0; // unmodelled_dynamics: validation NRMSE with that linear part
   std::string fit_scheme;        // "single_shooting" or "multiple_shooting"
   long shooting_segment = 0;     // samples per segment when multiple shooting
   std::string explanation;

@@ -203,8 +203,15 @@ std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const
 // effect_pairs.cc: forward selection of a second effect after `first` (the top single effect),
 // each other effect added to it and refitted together; kept when it passes the significance,
 // signature and validation-BIC rules against `first`. Updates report.verdict.
-void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first,
+// The pair must also beat `top_bic` (the best single candidate's validation BIC); when kept,
+// the verdict becomes the pair (verdict.effect = the first effect).
+void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
                         const std::vector<EffectKind>& kinds, GapReport& report);
+
+// linear_order.cc: a linear model of order n0 + 2 against the best single candidate `top`; when
+// it wins, sets the verdict to unmodelled_dynamics (plant = *higher) and returns true.
+bool TestUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, GapReport& report,
+                            TransferFunction* higher);
 
 // body(i) for i < count on up to `threads` threads (0: hardware); an exception is rethrown as
 // std::invalid_argument naming what(i).

@@ -422,9 +422,43 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
           "mismatch; excite at several amplitudes to separate them");
     }
   }
-  // A second effect, by forward selection (effect_pairs.cc).
-  if (v.effect != "ambiguous" && top.eligible && !top.effects.empty() && options.second_effect)
-    SelectSecondEffect(ctx, work.front(), kinds, report);
+  // A second effect, by forward selection (effect_pairs.cc), from the best eligible effect —
+  // also when parameter_mismatch tops the ranking: two effects together can leave a linear
+  // refit as the best single explanation.
+  if (v.effect != "ambiguous" && top.effect.kind != EffectKind::kNone && options.second_effect) {
+    const CandidateWork* first = nullptr;
+    for (const CandidateWork& w : work)
+      if (w.fit.eligible && !w.fit.effects.empty()) {
+        first = &w;
+        break;
+      }
+    if (first) SelectSecondEffect(ctx, *first, top.bic, kinds, report);
+  }
+  // The linear part itself (linear_order.cc); then the diagnosis again on the fixed linear part.
+  TransferFunction higher;
+  if (options.check_linear_order && v.effect != "none" && v.effects.size() < 2 &&
+      TestUnmodelledDynamics(ctx, top, report, &higher)) {
+    GapOptions inner = options;
+    inner.check_linear_order = false;
+    try {
+      const GapReport after = DiagnoseGap(higher, estimation, validation, inner);
+      const GapVerdict& a = after.verdict;
+      if (!a.effects.empty() && a.effect != "ambiguous" && a.effect != "parameter_mismatch") {
+        v.effects = a.effects;
+        v.effects_std = a.effects_std;
+        v.params = a.params;
+        v.param_std = a.param_std;
+        v.plant = a.plant;
+        v.nrmse_after = a.nrmse_after;
+        v.nuisance = a.nuisance;
+        v.nuisance.initial_state = after.verdict.nuisance.initial_state;
+      }
+      report.notes.push_back("after the linear part is fixed (order " + std::to_string(v.linear_order) +
+                             "): " + a.effect + ", validation NRMSE " + std::to_string(a.nrmse_after));
+    } catch (const std::exception& e) {
+      report.notes.push_back(std::string("diagnosis on the higher-order linear part failed: ") + e.what());
+    }
+  }
   std::vector<GapRecord> all_records = estimation;
   all_records.insert(all_records.end(), validation.begin(), validation.end());
   const OutputLattice lattice = DetectOutputLattice(all_records, ctx.q_step, floor.sigma);
@@ -432,6 +466,13 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   ApplyNoiseFloor(noise_nrmse, v);  // after the second effect: nrmse_after is final
   if (v.effect == "none")
     v.explanation = "no candidate explains the gap better than noise: G0 fits within the noise";
+  else if (v.effect == "unmodelled_dynamics")
+    v.explanation = "the linear part lacks dynamics: a linear model of order " +
+                    std::to_string(v.linear_order) + " beats every single effect (validation NRMSE " +
+                    std::to_string(v.linear_nrmse_after) + ")" +
+                    (v.effects.empty() ? std::string("; no static effect remains after it")
+                                       : "; after it, " + std::string(EffectName(v.effects[0].kind)) +
+                                             " brings the validation NRMSE to " + std::to_string(v.nrmse_after));
   else if (v.effect == "ambiguous")
     v.explanation = "the top candidates (" + v.tied[0] + ", " + v.tied[1] +
                     (v.tied.size() > 2 ? ", …" : "") +

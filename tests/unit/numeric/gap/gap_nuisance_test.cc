@@ -1,0 +1,228 @@
+// The gap diagnosis on rigs as they are: actuator and sensor offsets (nuisance parameters, never
+// an effect), an integrating plant (multiple shooting), two effects at once, and records that
+// are bad in the ways real records are (mostly clipped, drifting, at two operating points).
+// Truths are by construction (the rig is simulated with the effect library, 16 sub-steps).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+
+#include "core/numeric/gap/gap_bench.h"
+#include "core/numeric/gap/gap_diagnosis.h"
+
+namespace idrig {
+namespace {
+
+GapCase LevelsCase(EffectKind truth, uint64_t seed, int samples = 2500) {
+  for (uint64_t s = seed;; ++s) {
+    std::mt19937_64 rng(s);
+    GapCaseOptions options;
+    options.samples = samples;
+    options.excitation = "levels";
+    GapCase c = MakeGapCase(truth, rng, options);
+    if (c.excitation == "levels") return c;
+  }
+}
+
+double Rms(const Eigen::VectorXd& v) { return std::sqrt(v.squaredNorm() / v.size()); }
+
+// The recorded input misses the actuator's offset (the plant saw u + du), the recorded output
+// carries the sensor's (y + dy).
+void AddOffsets(GapCase& c, double du, double dy) {
+  for (GapRecord* r : {&c.estimation, &c.validation}) {
+    r->u.array() -= du;
+    r->y.array() += dy;
+  }
+}
+
+struct OffsetCase {
+  EffectKind truth;
+  uint64_t seed;
+};
+
+class OffsetTest : public ::testing::TestWithParam<OffsetCase> {};
+
+TEST_P(OffsetTest, OffsetsAreNuisanceNotAnEffect) {
+  GapCase c = LevelsCase(GetParam().truth, GetParam().seed);
+  const double du = 0.3 * Rms(c.estimation.u), dy = 0.5 * Rms(c.estimation.y);
+  AddOffsets(c, du, dy);
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation});
+  const GapVerdict& v = report.verdict;
+  std::printf("truth %-20s verdict %-20s du %.4f (fitted %.4f, %s) dy %.4f (fitted %.4f) NRMSE %.4f -> %.4f\n",
+              EffectName(c.truth), v.effect.c_str(), du, v.nuisance.input_offset,
+              v.nuisance.input_offset_fitted ? "fitted" : "not a parameter", dy,
+              v.nuisance.output_offset.empty() ? NAN : v.nuisance.output_offset[0], v.nrmse_before,
+              v.nrmse_after);
+  EXPECT_EQ(v.effect, EffectName(c.truth));
+  ASSERT_EQ(v.nuisance.output_offset.size(), 1u);
+  if (c.truth == EffectKind::kNone) {
+    // Offsets only: the nuisance absorbs them (du ≡ dy/G0(0) before a linear stable plant).
+    const double dc_gain = c.sim.num(c.sim.num.size() - 1) / c.sim.den(c.sim.den.size() - 1);
+    EXPECT_NEAR(v.nuisance.output_offset[0], dy + dc_gain * du, 0.1 * std::abs(dy) + 5 * c.noise_sigma);
+  }
+  if (c.truth == EffectKind::kDeadZone) {
+    // Through the dead zone the actuator offset is identifiable on its own.
+    ASSERT_TRUE(v.nuisance.input_offset_fitted);
+    EXPECT_NEAR(v.nuisance.input_offset, du, 0.15 * du);
+    EXPECT_NEAR(v.params.params[0], c.effect.params[0], 0.1 * c.effect.params[0]);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Rigs, OffsetTest,
+                         ::testing::Values(OffsetCase{EffectKind::kNone, 301},
+                                           OffsetCase{EffectKind::kDeadZone, 302},
+                                           OffsetCase{EffectKind::kCubicStiffness, 303},
+                                           OffsetCase{EffectKind::kOutputSaturation, 304}),
+                         [](const auto& info) { return std::string(EffectName(info.param.truth)); });
+
+TEST(GapIntegratingTest, FrictionOnAPositionFromForcePlantIsFrictionNotAFlexibleWrongEffect) {
+  // Position from force: m ẍ + c ẋ = F − F_c sign(ẋ), x measured; m = 1, c = 0.5.
+  TransferFunction plant;
+  plant.num = Eigen::VectorXd::Constant(1, 1.0);
+  plant.den = Eigen::Vector3d(1.0, 0.5, 0.0);
+  GapCase shape = LevelsCase(EffectKind::kNone, 311, 3000);
+  const double ts = shape.estimation.sample_time * 2;  // 0.02 s: 60 s per record
+  std::mt19937_64 rng(312);
+  const double u_rms = Rms(shape.estimation.u);
+  const Effect friction{EffectKind::kCoulombFriction, {0.25 * u_rms}};
+  GapRecord est, val;
+  for (auto [r, u] : {std::pair{&est, &shape.estimation.u}, std::pair{&val, &shape.validation.u}}) {
+    r->sample_time = ts;
+    r->u = *u;
+    const Eigen::VectorXd clean = SimulateRig(plant, friction, r->u, ts, 0.0, rng);
+    std::normal_distribution<double> noise(0.0, 0.01 * Rms(clean.array() - clean.mean()));
+    r->y = clean;
+    for (long k = 0; k < r->y.size(); ++k) r->y(k) += noise(rng);
+  }
+  const GapReport report = DiagnoseGap(plant, {est}, {val});
+  const GapVerdict& v = report.verdict;
+  std::printf("integrating plant: verdict %s (F_c %.4f, true %.4f), fit %s segment %ld, NRMSE %.4f -> %.4f\n",
+              v.effect.c_str(), v.params.params.empty() ? NAN : v.params.params[0], friction.params[0],
+              v.fit_scheme.c_str(), v.shooting_segment, v.nrmse_before, v.nrmse_after);
+  EXPECT_EQ(v.fit_scheme, "multiple_shooting");
+  EXPECT_EQ(v.effect, "coulomb_friction");
+  ASSERT_FALSE(v.params.params.empty());
+  EXPECT_NEAR(v.params.params[0], friction.params[0], 0.2 * friction.params[0]);
+}
+
+struct PairCase {
+  EffectKind first, second;
+  uint64_t seed;
+};
+
+class TwoEffectTest : public ::testing::TestWithParam<PairCase> {};
+
+// Effect parameters scaled to the record: limits at 70 % of max|u|, widths at 25 % of RMS(u),
+// the cubic term at 30 % of max|u| at max|y|.
+Effect Scaled(EffectKind kind, const GapRecord& r, const Eigen::VectorXd& y_lin) {
+  const double u_max = r.u.cwiseAbs().maxCoeff(), u_rms = Rms(r.u), y_max = y_lin.cwiseAbs().maxCoeff();
+  switch (kind) {
+    case EffectKind::kInputSaturation: return {kind, {-0.7 * u_max, 0.7 * u_max}};
+    case EffectKind::kDeadZone:
+    case EffectKind::kBacklash:
+    case EffectKind::kCoulombFriction: return {kind, {0.25 * u_rms}};
+    case EffectKind::kCubicStiffness: return {kind, {0.3 * u_max / std::pow(y_max, 3)}};
+    case EffectKind::kOutputQuantization: return {kind, {0.05 * y_max}};
+    default: return {kind, {}};
+  }
+}
+
+TEST_P(TwoEffectTest, BothEffectsAreNamed) {
+  const PairCase p = GetParam();
+  GapCase c = LevelsCase(EffectKind::kCoulombFriction, p.seed);  // a second-order plant
+  std::mt19937_64 rng(p.seed + 1);
+  const Eigen::VectorXd y_lin = SimulateWithEffect(c.real, Effect{}, c.estimation.u, c.estimation.sample_time);
+  const std::vector<Effect> effects = {Scaled(p.first, c.estimation, y_lin), Scaled(p.second, c.estimation, y_lin)};
+  EffectSimulationOptions fine;
+  fine.substeps = 16;
+  for (GapRecord* r : {&c.estimation, &c.validation}) {
+    r->y = SimulateWithEffects(c.real, effects, r->u, r->sample_time, fine);
+    const double sigma = Rms(r->y.array() - r->y.mean()) * std::pow(10.0, -30.0 / 20);
+    std::normal_distribution<double> noise(0.0, sigma);
+    for (long k = 0; k < r->y.size(); ++k) r->y(k) += noise(rng);
+  }
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation});
+  const GapVerdict& v = report.verdict;
+  std::printf("truth %s + %s: verdict %s, effects", EffectName(p.first), EffectName(p.second), v.effect.c_str());
+  for (const auto& e : v.effects) std::printf(" %s", EffectName(e.kind));
+  std::printf(", NRMSE %.4f -> %.4f\n", v.nrmse_before, v.nrmse_after);
+  if (std::getenv("GAP_DEBUG")) {
+    for (const auto& r : report.ranking)
+      std::printf("  %-22s nrmse %.4f est_mse %.3g bic %.1f LR %.1f/%.1f sig %.2f elig %d\n",
+                  EffectName(r.effect.kind), r.nrmse_after, r.estimation_mse, r.bic, r.likelihood_ratio,
+                  r.lr_threshold, r.signature, r.eligible);
+    for (const auto& n : report.notes) std::printf("  note: %s\n", n.c_str());
+  }
+  ASSERT_EQ(v.effects.size(), 2u);
+  const bool both = (v.effects[0].kind == p.first && v.effects[1].kind == p.second) ||
+                    (v.effects[0].kind == p.second && v.effects[1].kind == p.first);
+  EXPECT_TRUE(both);
+  EXPECT_EQ(v.effect, EffectName(v.effects[0].kind));  // verdict.effect stays the first
+  ASSERT_EQ(v.effects_std.size(), 2u);
+  for (const auto& sd : v.effects_std)
+    for (double s : sd) EXPECT_FALSE(s < 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Pairs, TwoEffectTest,
+    ::testing::Values(PairCase{EffectKind::kCoulombFriction, EffectKind::kInputSaturation, 321},
+                      PairCase{EffectKind::kDeadZone, EffectKind::kCubicStiffness, 322}),
+    [](const auto& info) {
+      return std::string(EffectName(info.param.first)) + "_with_" + EffectName(info.param.second);
+    });
+
+TEST(GapBadRecordTest, MostlyClippedRecordGetsAVerdictNotACrash) {
+  // An actuator offset so large that the input saturation clips ~90 % of the record.
+  GapCase c = LevelsCase(EffectKind::kInputSaturation, 331);
+  const double u_max = c.estimation.u.cwiseAbs().maxCoeff();
+  GapRecord est = c.estimation, val = c.validation;
+  for (GapRecord* r : {&est, &val}) r->u.array() += 3 * u_max;
+  Effect sat{EffectKind::kInputSaturation, {-u_max, 3.5 * u_max}};
+  std::mt19937_64 rng(332);
+  for (GapRecord* r : {&est, &val}) r->y = SimulateRig(c.real, sat, r->u, r->sample_time, 0.01, rng);
+  GapReport report;
+  ASSERT_NO_THROW(report = DiagnoseGap(c.sim, {est}, {val}));
+  std::printf("mostly clipped: verdict %s; %s\n", report.verdict.effect.c_str(), report.verdict.explanation.c_str());
+  EXPECT_FALSE(report.verdict.effect.empty());
+  EXPECT_TRUE(std::isfinite(report.verdict.nrmse_after));
+}
+
+TEST(GapBadRecordTest, IntegratingSimModelOnADriftingRecordIsFittedWithoutDrift) {
+  // G0 = 2/s, a biased input: the level ends far from where it started.
+  TransferFunction sim;
+  sim.num = Eigen::VectorXd::Constant(1, 2.0);
+  sim.den = Eigen::Vector2d(1.0, 0.0);
+  GapCase shape = LevelsCase(EffectKind::kNone, 341);
+  std::mt19937_64 rng(342);
+  GapRecord est = shape.estimation, val = shape.validation;
+  for (GapRecord* r : {&est, &val}) {
+    r->u.array() += 0.2 * Rms(r->u);
+    r->y = SimulateRig(sim, Effect{}, r->u, r->sample_time, 0.0, rng);
+    std::normal_distribution<double> noise(0.0, 0.01 * Rms(r->y.array() - r->y.mean()));
+    for (long k = 0; k < r->y.size(); ++k) r->y(k) += noise(rng);
+  }
+  ASSERT_GT(std::abs(est.y(est.y.size() - 1) - est.y(0)), Rms(est.y.array() - est.y.mean()));
+  GapReport report;
+  ASSERT_NO_THROW(report = DiagnoseGap(sim, {est}, {val}));
+  std::printf("drifting integrator: verdict %s, fit %s\n", report.verdict.effect.c_str(),
+              report.verdict.fit_scheme.c_str());
+  EXPECT_EQ(report.verdict.fit_scheme, "multiple_shooting");
+  EXPECT_EQ(report.verdict.effect, "none");
+}
+
+TEST(GapBadRecordTest, TwoRecordsAtDifferentOperatingPointsAreNotAnEffect) {
+  GapCase a = LevelsCase(EffectKind::kNone, 351), b = LevelsCase(EffectKind::kNone, 351);
+  b.estimation.y.array() += 3 * Rms(b.estimation.y);  // the second record at another level
+  a.estimation.y.array() -= 1 * Rms(a.estimation.y);
+  GapReport report;
+  ASSERT_NO_THROW(report = DiagnoseGap(a.sim, {a.estimation, b.estimation}, {a.validation}));
+  std::printf("two operating points: verdict %s, output offsets %.3f %.3f\n", report.verdict.effect.c_str(),
+              report.verdict.nuisance.output_offset.at(0), report.verdict.nuisance.output_offset.at(1));
+  EXPECT_EQ(report.verdict.effect, "none");
+  EXPECT_EQ(report.verdict.nuisance.output_offset.size(), 2u);
+}
+
+}  // namespace
+}  // namespace idrig
