@@ -14,6 +14,10 @@
 namespace idrig::gap_detail {
 namespace {
 
+// Quantisation as a second effect only when the samples sit on a lattice (mean resultant
+// length R of exp(2πi y/q); ≈ 1/√N without one): a smoothed staircase otherwise fits noise.
+constexpr double kLatticeStrength = 0.3;
+
 // Pairs that one simulation can hold: one input-side map, one output-side map, at most one
 // of each feedback term; a linear effect with anything. Not the same effect twice.
 bool Compatible(EffectKind a, EffectKind b) {
@@ -37,10 +41,17 @@ void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, doubl
   const EffectKind k1 = first.spec.kinds.front();
   std::vector<EffectKind> seconds;
   for (EffectKind k : kinds)
-    if (k != EffectKind::kNone && k != EffectKind::kParameterMismatch && Compatible(k1, k))
+    if (k != EffectKind::kNone && k != EffectKind::kParameterMismatch && Compatible(k1, k) &&
+        (k != EffectKind::kOutputQuantization || ctx.q_strength >= kLatticeStrength))
       seconds.push_back(k);
   if (seconds.empty()) return;
   const Candidate base(*ctx.g0, first.spec, ctx.scales, ctx.options->substeps);
+  // A lighter polish than a single effect's (the first effect is already in place): the pair
+  // search is most of the cost of a diagnosis otherwise.
+  GapOptions light = *ctx.options;
+  light.evaluations_polish = std::min(light.evaluations_polish, 3 * light.evaluations_per_start);
+  FitContext pair_ctx = ctx;
+  pair_ctx.options = &light;
   std::vector<CandidateWork> pairs(seconds.size());
   ParallelFor(seconds.size(), ctx.options->threads, [&](size_t i) {
     const EffectKind k2 = seconds[i];
@@ -65,9 +76,9 @@ void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, doubl
         starts.insert(starts.begin(), linear.begin(), linear.end());
       }
       // Fewer starts than a single effect: the first effect is already in place.
-      if (starts.size() > 4) starts.resize(4);
+      if (starts.size() > 3) starts.resize(3);
       CandidateWork trial;
-      FitSpec(ctx, spec, {prefix}, starts, trial);
+      FitSpec(pair_ctx, spec, {prefix}, starts, trial);
       const double criterion = ctx.n_est * std::log(trial.fit.estimation_mse) +
                                trial.fit.parameters * std::log(double(ctx.n_est));
       if (criterion < best) best = criterion, pairs[i] = trial;
@@ -110,16 +121,7 @@ void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, doubl
   }
   const CandidateFit& c = chosen->fit;
   v.effect = EffectName(k1);
-  v.effects = c.effects;
-  v.effects_std = c.effects_std;
-  v.params = c.effects.front();
-  v.param_std = c.effects_std.front();
-  v.plant = c.plant;
-  v.nrmse_after = c.nrmse_after;
-  v.nuisance.input_offset = c.input_offset;
-  v.nuisance.input_offset_std = c.input_offset_std;
-  v.nuisance.input_offset_fitted = c.input_offset_fitted;
-  v.nuisance.output_offset = c.output_offsets;
+  AdoptCandidate(c, v);
   report.notes.push_back(std::string("second effect after ") + EffectName(k1) + ": " +
                          EffectName(c.effects[1].kind) + " kept (" + tried + ")");
 }

@@ -213,6 +213,9 @@ void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, doubl
 bool TestUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, GapReport& report,
                             TransferFunction* higher);
 
+// The verdict takes the candidate's effects, their 1σ, plant, validation NRMSE and nuisance.
+void AdoptCandidate(const CandidateFit& c, GapVerdict& v);
+
 // body(i) for i < count on up to `threads` threads (0: hardware); an exception is rethrown as
 // std::invalid_argument naming what(i).
 void ParallelFor(size_t count, int threads, const std::function<void(size_t)>& body,

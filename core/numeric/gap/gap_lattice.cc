@@ -5,7 +5,7 @@
 #include <set>
 #include <sstream>
 
-#include "core/numeric/gap/gap_diagnosis.h"
+#include "core/numeric/gap/gap_internal.h"
 #include "core/numeric/gap/gap_noise.h"
 
 namespace idrig {
@@ -75,16 +75,8 @@ void NameLatticeQuantisation(const OutputLattice& l, double noise_nrmse, GapRepo
       if (c.effect.kind == EffectKind::kOutputQuantization && c.effects.size() <= 1) q = &c;
     v.effect = "output_quantization";
     if (q) {
-      v.params = q->effect;
-      v.param_std = q->param_std;
-      v.plant = q->plant;
-      v.effects = q->effects.empty() ? std::vector<Effect>{q->effect} : q->effects;
-      v.effects_std = q->effects_std;
-      v.nrmse_after = q->nrmse_after;
-      v.nuisance.input_offset = q->input_offset;
-      v.nuisance.input_offset_std = q->input_offset_std;
-      v.nuisance.input_offset_fitted = q->input_offset_fitted;
-      v.nuisance.output_offset = q->output_offsets;
+      gap_detail::AdoptCandidate(*q, v);
+      if (v.effects.empty()) v.effects = {q->effect};
     } else {
       v.params = quantiser;
       v.param_std = {std::nan("")};

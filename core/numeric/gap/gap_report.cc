@@ -134,7 +134,43 @@ void ChooseFitScheme(const TransferFunction& g0, const std::vector<GapRecord>& e
   if (ctx.nuisance.segment >= longest) ctx.nuisance.segment = 0;
 }
 
+// A reference candidate (none, or the refitted G0) as fitted, for the ranking.
+CandidateWork ReferenceWork(const Candidate& cand, const FitOutcome& fit, const Eigen::VectorXd& y_val,
+                            const std::vector<GapRecord>& estimation) {
+  CandidateWork w;
+  CandidateFit& c = w.fit;
+  c.effect = cand.EffectOf(fit.x);
+  c.plant = cand.Plant(fit.x);
+  c.parameters = cand.Size();
+  c.estimation_mse = fit.mse;
+  c.evaluations = fit.evaluations;
+  c.input_offset = cand.InputOffset(fit.x);
+  c.input_offset_fitted = cand.NuisanceParams() > 0;
+  for (const GapRecord& r : estimation) {
+    Nuisance nu;
+    cand.Predict(fit.x, r, &nu);
+    c.output_offsets.push_back(nu.output_offset);
+  }
+  w.y_val = y_val;
+  w.x = fit.x;
+  w.spec = cand.spec();
+  return w;
+}
+
 }  // namespace
+
+void gap_detail::AdoptCandidate(const CandidateFit& c, GapVerdict& v) {
+  v.effects = c.effects;
+  v.effects_std = c.effects_std;
+  v.params = c.effects.empty() ? c.effect : c.effects.front();
+  v.param_std = c.effects_std.empty() ? c.param_std : c.effects_std.front();
+  v.plant = c.plant;
+  v.nrmse_after = c.nrmse_after;
+  v.nuisance.input_offset = c.input_offset;
+  v.nuisance.input_offset_std = c.input_offset_std;
+  v.nuisance.input_offset_fitted = c.input_offset_fitted;
+  v.nuisance.output_offset = c.output_offsets;
+}
 
 void gap_detail::ParallelFor(size_t count, int threads_wanted, const std::function<void(size_t)>& body,
                  const std::function<std::string(size_t)>& what) {
@@ -323,37 +359,14 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     CandidateWork w;
     CandidateFit& c = w.fit;
     if (kind == EffectKind::kNone) {
+      w = ReferenceWork(as_is, as_is_fit, y0_val, estimation);
       c.effect.kind = kind;
       c.plant = g0;
-      c.parameters = as_is.Size();
-      c.estimation_mse = as_is_fit.mse;
-      c.input_offset = as_is.InputOffset(as_is_fit.x);
-      c.input_offset_fitted = as_is.NuisanceParams() > 0;
-      w.y_val = y0_val;
-      w.x = as_is_fit.x;
-      w.spec = as_is.spec();
       c.significant = true;
     } else if (kind == EffectKind::kParameterMismatch) {
-      c.effect = refit.EffectOf(refit_fit.x);
-      c.plant = refit.Plant(refit_fit.x);
-      c.parameters = refit.Size();
-      c.estimation_mse = refit_fit.mse;
-      c.evaluations = refit_fit.evaluations;
-      c.input_offset = refit.InputOffset(refit_fit.x);
-      c.input_offset_fitted = refit.NuisanceParams() > 0;
-      w.y_val = y_refit_val;
-      w.x = refit_fit.x;
-      w.spec = refit.spec();
+      w = ReferenceWork(refit, refit_fit, y_refit_val, estimation);
     } else {
       FitEffect(ctx, kind, w);
-    }
-    if (c.output_offsets.empty()) {
-      const Candidate& cand = kind == EffectKind::kNone ? as_is : refit;
-      for (const GapRecord& r : estimation) {
-        Nuisance nu;
-        cand.Predict(w.x, r, &nu);
-        c.output_offsets.push_back(nu.output_offset);
-      }
     }
     ScoreCandidate(ctx, w);
     return w;
@@ -382,17 +395,9 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const CandidateFit& top = report.ranking.front();
   v.effect = EffectName(top.effect.kind);
   v.confidence = top.score;
+  AdoptCandidate(top, v);
   v.params = top.effect;
-  v.param_std = top.param_std;
-  v.plant = top.plant;
-  v.effects = top.effects;
-  v.effects_std = top.effects_std;
-  v.nuisance.input_offset = top.input_offset;
-  v.nuisance.input_offset_std = top.input_offset_std;
-  v.nuisance.input_offset_fitted = top.input_offset_fitted;
-  v.nuisance.output_offset = top.output_offsets;
   v.nrmse_before = Nrmse(y_val, y0_val)(0);
-  v.nrmse_after = top.nrmse_after;
   const double noise_nrmse = floor.sigma / std::max(y_val_spread, 1e-300);
   if (report.ranking.size() > 1 && report.ranking[1].eligible &&
       report.ranking[1].bic - top.bic < options.ambiguity_bic) {
@@ -418,26 +423,15 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
       report.notes.push_back(
           "the input takes two values only, and the gap is a pure gain change (gain-only refit "
           "not worse: LR " + std::to_string(lr) + "): input dead zone, backlash and symmetric "
-          "saturation act as a gain on such a signal and cannot be told from a parameter "
+          "saturation act as a gain on such a signal (an asymmetric saturation as a gain plus an offset, which the output offset absorbs) and cannot be told from a parameter "
           "mismatch; excite at several amplitudes to separate them");
     }
   }
-  // A second effect, by forward selection (effect_pairs.cc), from the best eligible effect —
-  // also when parameter_mismatch tops the ranking: two effects together can leave a linear
-  // refit as the best single explanation.
-  if (v.effect != "ambiguous" && top.effect.kind != EffectKind::kNone && options.second_effect) {
-    const CandidateWork* first = nullptr;
-    for (const CandidateWork& w : work)
-      if (w.fit.eligible && !w.fit.effects.empty()) {
-        first = &w;
-        break;
-      }
-    if (first) SelectSecondEffect(ctx, *first, top.bic, kinds, report);
-  }
   // The linear part itself (linear_order.cc); then the diagnosis again on the fixed linear part.
   TransferFunction higher;
-  if (options.check_linear_order && v.effect != "none" && v.effects.size() < 2 &&
-      TestUnmodelledDynamics(ctx, top, report, &higher)) {
+  const bool unmodelled = options.check_linear_order && v.effect != "none" && v.effect != "ambiguous" &&
+                          TestUnmodelledDynamics(ctx, top, report, &higher);
+  if (unmodelled) {
     GapOptions inner = options;
     inner.check_linear_order = false;
     try {
@@ -458,6 +452,19 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     } catch (const std::exception& e) {
       report.notes.push_back(std::string("diagnosis on the higher-order linear part failed: ") + e.what());
     }
+  }
+  // A second effect, by forward selection (effect_pairs.cc), from the best eligible effect —
+  // also when parameter_mismatch tops the ranking: two effects together can leave a linear
+  // refit as the best single explanation.
+  if (!unmodelled && v.effect != "ambiguous" && top.effect.kind != EffectKind::kNone &&
+      options.second_effect) {
+    const CandidateWork* first = nullptr;
+    for (const CandidateWork& w : work)
+      if (w.fit.eligible && !w.fit.effects.empty()) {
+        first = &w;
+        break;
+      }
+    if (first) SelectSecondEffect(ctx, *first, top.bic, kinds, report);
   }
   std::vector<GapRecord> all_records = estimation;
   all_records.insert(all_records.end(), validation.begin(), validation.end());

@@ -1,7 +1,7 @@
 // When the linear part is the problem (see gap_diagnosis.h): G0 lacks dynamics, so a linear
-// model of higher order (ARX of order n0 + 2 refined by Steiglitz–McBride output-error
-// iterations, time_domain/arx.h, then refitted here by the same output-error fit as every
-// candidate, nuisance included) beats every single effect. It is judged by the rules an effect
+// model of higher order (n0 + 2: G0 times two more poles and zeros, all coefficients free,
+// fitted by the same output-error fit as every candidate, nuisance included) beats every
+// single effect. It is judged by the rules an effect
 // is judged by — Wilks' likelihood ratio against the refitted G0 on the estimation records,
 // the signature check and the validation BIC against the best single candidate — and, when it
 // wins, the verdict is `unmodelled_dynamics` and the diagnosis runs again on the higher-order
@@ -9,38 +9,50 @@
 #include <cmath>
 
 #include "core/numeric/gap/gap_internal.h"
-#include "core/numeric/time_domain/arx.h"
+#include <memory>
 #include "core/numeric/validation.h"
 
 namespace idrig::gap_detail {
 
+namespace {
+
+Eigen::VectorXd Multiply(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(a.size() + b.size() - 1);
+  for (int i = 0; i < a.size(); ++i)
+    for (int j = 0; j < b.size(); ++j) c(i + j) += a(i) * b(j);
+  return c;
+}
+
+}  // namespace
+
 bool TestUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, GapReport& report,
                             TransferFunction* higher) {
   const GapOptions& options = *ctx.options;
-  const GapRecord& first = ctx.estimation->front();
   const int n0 = ctx.g0->Order();
-  ArxOptions arx;
-  arx.order = n0 + 2;
-  arx.oe_iterations = 8;
-  arx.validate = false;
-  ArxResult fit;
-  try {
-    fit = IdentifyArx(MakeIoRecord(first.u, first.y, first.sample_time), arx);
-  } catch (const std::exception& e) {
-    report.notes.push_back(std::string("linear order check skipped: ") + e.what());
-    return false;
+  const int order = n0 + 2;
+  // Starts: G0·P(s)/P(s) with P = s² + ω s + ω² (ζ = 0.5) at three frequencies across the band:
+  // exactly G0, and every coefficient of numerator and denominator then moves (log multipliers),
+  // so the fit can place two more poles and zeros anywhere. Continuous by construction, which an
+  // ARX model of higher order at a high sample rate often is not (poles on the negative axis).
+  FitOutcome best;
+  std::unique_ptr<Candidate> best_cand;
+  for (double share : {0.02, 0.1, 0.4}) {
+    const double w = share * M_PI / ctx.scales.ts;
+    const Eigen::Vector3d p(1.0, w, w * w);
+    TransferFunction g = *ctx.g0;
+    g.num = Multiply(g.num, p);
+    g.den = Multiply(g.den, p);
+    g = Normalized(g);
+    auto cand = std::make_unique<Candidate>(g, SpecFor(ctx, {EffectKind::kParameterMismatch}), ctx.scales,
+                                            options.substeps);
+    const Residuals residuals{cand.get(), ctx.estimation, ctx.n_est};
+    Eigen::VectorXd x0 = Eigen::VectorXd::Zero(cand->Size());
+    const FitOutcome f = Minimise(residuals, x0, options.evaluations_polish * (cand->Size() + 1));
+    if (!(f.mse >= best.mse)) best = f, best_cand = std::move(cand);
   }
-  if (!fit.continuous_recovered) {
-    report.notes.push_back("linear order check skipped: the order-" + std::to_string(arx.order) +
-                           " ARX model has no continuous equivalent at this sample rate");
-    return false;
-  }
-  TransferFunction g_hi = Normalized(fit.continuous_tf);
-  CandidateSpec spec = SpecFor(ctx, {EffectKind::kParameterMismatch});
-  const Candidate cand(g_hi, spec, ctx.scales, options.substeps);
-  const Residuals residuals{&cand, ctx.estimation, ctx.n_est};
-  const FitOutcome f = Minimise(residuals, Eigen::VectorXd::Zero(cand.Size()),
-                                options.evaluations_polish * (cand.Size() + 1));
+  const Candidate& cand = *best_cand;
+  const FitOutcome& f = best;
+
   const Eigen::VectorXd y_hat = Stack(*ctx.validation, [&](const GapRecord& r) { return cand.Predict(f.x, r); });
   const int dof = std::max(1, cand.Size() - ctx.refit_size);
   const double lr = ctx.n_est * std::log(ctx.refit_fit.mse / std::max(f.mse, 1e-300));
@@ -54,7 +66,7 @@ bool TestUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, GapR
   std::snprintf(line, sizeof line,
                 "linear order check: order %d → %d, LR %.1f (threshold %.1f), signature %.2f, "
                 "validation NRMSE %.4f, ΔBIC %.1f against the best single candidate (%s)",
-                n0, arx.order, lr, threshold, signature, nrmse, bic - top.bic, EffectName(top.effect.kind));
+                n0, order, lr, threshold, signature, nrmse, bic - top.bic, EffectName(top.effect.kind));
   report.notes.push_back(line);
   if (!(lr > threshold && signature >= options.min_signature && bic < top.bic - options.ambiguity_bic))
     return false;
@@ -69,7 +81,7 @@ bool TestUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, GapR
   v.effects_std.clear();
   v.plant = *higher;
   v.nrmse_after = nrmse;
-  v.linear_order = arx.order;
+  v.linear_order = order;
   v.linear_nrmse_after = nrmse;
   return true;
 }
