@@ -65,6 +65,45 @@ Effect EffectFromJson(const nlohmann::json& json) {
   return effect;
 }
 
+static nlohmann::json NoiseFloorJson(const NoiseFloor& f, double nrmse) {
+  nlohmann::json j = {{"method", f.method}, {"sigma", f.sigma}, {"nrmse", nrmse}, {"samples", f.samples}};
+  if (f.method == "periods") {
+    j["period_samples"] = f.period;
+    j["periods"] = f.periods;
+  } else if (f.method == "arx_prediction") {
+    j["order"] = f.order;
+    j["ar_gain"] = f.ar_gain;
+  }
+  return j;
+}
+
+static nlohmann::json DetectionLinesJson(const DetectionLines& d) {
+  if (!d.available) return {{"available", false}, {"reason", d.reason}};
+  auto db = [](double p) { return p > 0 ? 10 * std::log10(p) : -300.0; };
+  nlohmann::json lines = nlohmann::json::array();
+  for (const auto& l : d.lines) {
+    if (lines.size() >= 2048) break;
+    nlohmann::json j = {{"f_hz", l.f_hz}, {"line", l.line}, {"kind", l.kind}, {"y_db", db(l.y_power)},
+                        {"noise_db", db(l.noise_power)}, {"significant", l.significant}};
+    if (l.kind == "excited") {
+      j["bla_magnitude"] = l.bla_magnitude;
+      j["bla_phase"] = l.bla_phase;
+      j["bla_noise_std"] = l.bla_noise_std;
+      j["bla_distortion_std"] = std::isfinite(l.bla_distortion_std) ? nlohmann::json(l.bla_distortion_std) : nlohmann::json();
+      j["sim_magnitude"] = l.sim_magnitude;
+    }
+    lines.push_back(j);
+  }
+  return {{"available", true}, {"period_samples", d.period_samples}, {"periods", d.periods},
+          {"steady_from", d.steady_from}, {"f0_hz", d.f0_hz}, {"excited", d.excited},
+          {"odd_lines", d.odd_lines}, {"even_lines", d.even_lines}, {"odd_out_of_band", d.odd_out_of_band},
+          {"odd_significant", d.odd_significant}, {"even_significant", d.even_significant},
+          {"odd_to_noise_db", d.odd_to_noise_db}, {"even_to_noise_db", d.even_to_noise_db},
+          {"odd_to_output_db", d.odd_to_output_db}, {"even_to_output_db", d.even_to_output_db},
+          {"odd_distortion", d.odd_distortion}, {"even_distortion", d.even_distortion},
+          {"bla_vs_sim", d.bla_vs_sim}, {"lines", lines}};
+}
+
 nlohmann::json GapReportToJson(const GapReport& report) {
   const GapVerdict& v = report.verdict;
   nlohmann::json verdict = {
@@ -73,6 +112,9 @@ nlohmann::json GapReportToJson(const GapReport& report) {
       {"nrmse_before", v.nrmse_before},
       {"nrmse_after", v.nrmse_after},
       {"shrink", v.shrink},
+      {"noise_nrmse", v.noise_nrmse},
+      {"remaining_gap_to_noise", v.remaining_gap_to_noise},
+      {"below_noise_floor", v.below_noise_floor},
       {"effect_fitted", EffectName(v.params.kind)},
       {"params", Params(v.params)},
       {"params_std", Params(Effect{v.params.kind, v.param_std})},
@@ -141,6 +183,12 @@ nlohmann::json GapReportToJson(const GapReport& report) {
   nlohmann::json where = {
       {"nrmse_before", w.nrmse_before},
       {"noise_nrmse", w.noise_nrmse},
+      {"noise_floor", NoiseFloorJson(w.noise_floor, w.noise_nrmse)},
+      {"detection_lines", DetectionLinesJson(w.detection_lines)},
+      {"lattice", {{"lattice", w.lattice.lattice}, {"detected", w.lattice.detected}, {"step", w.lattice.step},
+                   {"offset", w.lattice.offset}, {"on_lattice", w.lattice.on_lattice},
+                   {"resultant", w.lattice.resultant}, {"levels", w.lattice.levels},
+                   {"noise_share", w.lattice.noise_share}, {"reason", w.lattice.reason}}},
       {"gap_to_noise", w.gap_to_noise},
       {"gap_significant", w.gap_significant},
       {"residual_white", w.residual_white},
@@ -172,7 +220,11 @@ std::string GapReportText(const nlohmann::json& report) {
   s << "  " << v.at("explanation").get<std::string>() << "\n";
   s << "  validation NRMSE before " << v.at("nrmse_before").get<double>() << ", after "
     << v.at("nrmse_after").get<double>() << ", noise floor "
-    << report.at("where").at("noise_nrmse").get<double>() << "\n";
+    << report.at("where").at("noise_nrmse").get<double>();
+  if (report.at("where").contains("noise_floor"))
+    s << " (" << report["where"]["noise_floor"].value("method", "") << ")";
+  if (v.value("below_noise_floor", false)) s << ", below the floor";
+  s << "\n";
   for (const auto& [name, value] : v.at("params").items()) {
     s << "  " << name << " = " << value;
     const auto& sd = v.at("params_std")[name];
@@ -193,6 +245,14 @@ std::string GapReportText(const nlohmann::json& report) {
       << v.value("fit_scheme", "") << "\n";
   }
   s << "where: " << report.at("where").at("summary").get<std::string>() << "\n";
+  if (report.at("where").contains("detection_lines") && report["where"]["detection_lines"].value("available", false)) {
+    const auto& d = report["where"]["detection_lines"];
+    s << "detection lines (" << d.at("periods").get<int>() << " periods): odd "
+      << d.at("odd_to_noise_db").get<double>() << " dB over noise ("
+      << (d.at("odd_distortion").get<bool>() ? "odd nonlinearity" : "noise only") << "), even "
+      << d.at("even_to_noise_db").get<double>() << " dB ("
+      << (d.at("even_distortion").get<bool>() ? "even nonlinearity" : "noise only") << ")\n";
+  }
   s << "ranking (validation BIC; eligible = significant on estimation data and matching the gap):\n";
   s << "  " << std::left << std::setw(22) << "effect" << std::setw(12) << "NRMSE" << std::setw(12)
     << "score" << std::setw(10) << "LR/thr" << "signature\n";

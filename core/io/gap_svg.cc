@@ -42,6 +42,51 @@ std::string FactorChart(const std::string& title, const std::string& x_label,
   return BarChartSvg(c);
 }
 
+// The output spectrum of a periodic odd multisine by line: excited lines (black), odd (red) and
+// even (blue) detection lines, and the noise of the period mean (grey), in dB.
+std::string LinesChart(const nlohmann::json& lines) {
+  const int width = 760, height = 420, left = 70, right = 20, top = 40, bottom = 60;
+  const int plot_w = width - left - right, plot_h = height - top - bottom;
+  auto db = [](double p) { return p > 0 ? 10 * std::log10(p) : -300.0; };
+  double f_max = 0, hi = -300, lo = 300;
+  for (const auto& l : lines) {
+    f_max = std::max(f_max, l.at("f_hz").get<double>());
+    for (const char* key : {"y_db", "noise_db"}) {
+      const double v = l.at(key).get<double>();
+      if (v > -290) hi = std::max(hi, v), lo = std::min(lo, v);
+    }
+  }
+  if (!(f_max > 0) || !(hi > lo)) return "";
+  lo = std::max(lo, hi - 120);
+  auto px = [&](double f) { return left + plot_w * f / f_max; };
+  auto py = [&](double v) { return top + plot_h * (hi - std::max(v, lo)) / (hi - lo); };
+  std::ostringstream s;
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
+    << "\" font-family=\"sans-serif\" font-size=\"11\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+    << "<text x=\"" << width / 2 << "\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">"
+    << "Output by line: excited (black), odd (red) and even (blue) detection lines, noise (grey)</text>\n"
+    << "<line x1=\"" << left << "\" y1=\"" << top + plot_h << "\" x2=\"" << left + plot_w << "\" y2=\""
+    << top + plot_h << "\" stroke=\"black\"/>\n<line x1=\"" << left << "\" y1=\"" << top << "\" x2=\"" << left
+    << "\" y2=\"" << top + plot_h << "\" stroke=\"black\"/>\n"
+    << "<text x=\"" << left + plot_w / 2 << "\" y=\"" << height - 20 << "\" text-anchor=\"middle\">frequency [Hz] (0 – "
+    << Format(f_max) << ")</text>\n<text transform=\"translate(16," << top + plot_h / 2
+    << ") rotate(-90)\" text-anchor=\"middle\">|Y|² [dB]</text>\n";
+  for (int i = 0; i <= 4; ++i) {
+    const double v = lo + (hi - lo) * i / 4;
+    s << "<text x=\"" << left - 6 << "\" y=\"" << py(v) + 4 << "\" text-anchor=\"end\">" << Format(v) << "</text>\n";
+  }
+  for (const auto& l : lines) {
+    const std::string kind = l.at("kind").get<std::string>();
+    const char* colour = kind == "excited" ? "black" : (kind == "odd" ? "#c0392b" : "#2e86c1");
+    const double x = px(l.at("f_hz").get<double>());
+    s << "<circle cx=\"" << x << "\" cy=\"" << py(l.at("noise_db").get<double>()) << "\" r=\"1.5\" fill=\"#aaa\"/>"
+      << "<circle cx=\"" << x << "\" cy=\"" << py(l.at("y_db").get<double>()) << "\" r=\"2.5\" fill=\"" << colour
+      << "\"/>\n";
+  }
+  s << "</svg>\n";
+  return s.str();
+}
+
 }  // namespace
 
 std::map<std::string, std::string> GapReportSvgs(const nlohmann::json& report) {
@@ -73,6 +118,10 @@ std::map<std::string, std::string> GapReportSvgs(const nlohmann::json& report) {
   if (factors.contains("time"))
     out["gap_time.svg"] = FactorChart("Where: gap over time", "record quarter",
                                       FactorBars(factors["time"]), floor);
+  if (where.contains("detection_lines") && where["detection_lines"].value("available", false)) {
+    const std::string svg = LinesChart(where["detection_lines"].at("lines"));
+    if (!svg.empty()) out["gap_lines.svg"] = svg;
+  }
   BarChart ranking;
   ranking.title = "Which, and how far: validation NRMSE with each candidate effect added";
   ranking.x_label = "candidate effect";

@@ -55,4 +55,47 @@ expect "cannot open" "$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$
 expect "not a gap report" "$idrig" gap report "$dir/case2-sim.json"
 echo '{"format":' > "$dir/broken.json"
 expect "not valid JSON" "$idrig" gap report "$dir/broken.json"
+# --- issue 13: bench with operating points and pairs; noise floor, lattice and detection lines.
+"$idrig" gap bench --cases 2 --seed 3 --samples 1000 --offsets --combos 0.5 --dump "$dir/pairs" --json \
+  > "$dir/pairs.json" 2>/dev/null || fail "gap bench --offsets --combos exited with $?"
+for key in '"combo_both_named"' '"combo_top1_either"' '"combo_cases": 1' '"offsets": true' '"single_cases": 1'; do
+  grep -q -- "$key" "$dir/pairs.json" || fail "bench JSON lacks $key"
+done
+jq -e '(.effects | length) == 2 and .input_offset != 0 and .output_offset != 0' "$dir/pairs/case1-truth.json" \
+  > /dev/null || fail "case 1 is not a pair with offsets"
+expect "must be in [0, 1]" "$idrig" gap bench --cases 1 --combos 1.5
+echo "ok: bench with offsets and pairs"
+
+# An odd multisine (lines 1, 3, …, 15 of fs/256), 8 periods, through 5/(s+5) and a sensor with a
+# y² term: the even detection lines carry the distortion, the odd ones only noise.
+awk 'BEGIN { srand(1); ts = 0.01; n = 256; a = exp(-5 * ts); pi = atan2(0, -1)
+  for (l = 1; l <= 15; l += 2) ph[l] = 2 * pi * rand()
+  print "t,u,y"; yl = 0; up = 0
+  for (k = 0; k < 8 * n; k++) {
+    u = 0; for (l = 1; l <= 15; l += 2) u += 0.35 * sin(2 * pi * l * k / n + ph[l])
+    yl = a * yl + (1 - a) * up; up = u
+    e = 0.002 * sqrt(-2 * log(1 - rand())) * cos(2 * pi * rand())
+    printf "%.6f,%.10g,%.10g\n", k * ts, u, yl + 0.4 * yl * yl + e } }' > "$dir/odd.csv"
+echo '{"format":"idrig.model/1","kind":"tf","domain":"continuous","num":[5],"den":[1,5]}' > "$dir/first.json"
+"$idrig" gap diagnose --sim "$dir/first.json" --data "$dir/odd.csv" --json --plots "$dir/odd-plots" \
+  > "$dir/odd.json" 2>/dev/null || fail "gap diagnose (odd multisine) exited with $?"
+jq -e '.where.detection_lines as $d | .where.noise_floor as $f | .verdict as $v
+  | $d.available and $d.period_samples == 256 and $d.even_distortion and ($d.odd_distortion | not)
+  and $f.method == "periods" and ($f.sigma / 0.002 - 1 | fabs) < 0.15
+  and (($v.remaining_gap_to_noise - ($v.nrmse_after - $v.noise_nrmse)) | fabs) < 1e-12
+  and ($v.below_noise_floor or $v.shrink <= 1)' "$dir/odd.json" > /dev/null \
+  || fail "detection lines / noise floor on the odd multisine: $(jq -c '.where.detection_lines | del(.lines)' "$dir/odd.json")"
+echo "ok: detection lines and the noise floor from periods"
+
+# A lattice: case 2's output read by a coarse ADC with an offset (step 4 % of the range); the
+# same record with its continuous output has no lattice.
+awk -F, 'NR == 1 { print; next } { y[NR] = $3; t[NR] = $1; u[NR] = $2; if (NR == 2 || $3 < lo) lo = $3; if (NR == 2 || $3 > hi) hi = $3 }
+  END { q = 0.04 * (hi - lo); for (i = 2; i <= NR; i++) printf "%s,%s,%.10g\n", t[i], u[i], 0.37 * q + q * int((y[i] - 0.37 * q) / q + 1000.5) - 1000 * q }' \
+  "$dir/case2-est.csv" > "$dir/adc.csv"
+"$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/adc.csv" --json > "$dir/adc.json" 2>/dev/null \
+  || fail "gap diagnose (ADC) exited with $?"
+jq -e '.where.lattice.lattice and .where.lattice.detected
+  and ([.verdict.effect] + [.verdict.effects[]?.effect] | index("output_quantization") != null)' \
+  "$dir/adc.json" > /dev/null || fail "lattice not named on the ADC record: $(jq -c '.where.lattice, .verdict.effect' "$dir/adc.json")"
+echo "ok: lattice"
 exit $status

@@ -1,5 +1,6 @@
 // idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--json]
-// idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--jobs J] [--json]
+// idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--jobs J] [--offsets] [--combos F] [--json]
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <filesystem>
@@ -10,6 +11,7 @@
 #include <memory>
 #include <mutex>
 #include <random>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -26,13 +28,6 @@
 namespace idrig {
 namespace {
 
-struct BenchOutcome {
-  EffectKind truth;
-  std::string verdict;
-  double shrink = 0, confidence = 0, seconds = 0;
-  std::string excitation;
-};
-
 void WriteCase(const GapCase& c, const std::string& dir, int index) {
   const std::string base = dir + "/case" + std::to_string(index);
   WriteModelFile(LtiModel(c.sim), base + "-sim.json");
@@ -40,98 +35,126 @@ void WriteCase(const GapCase& c, const std::string& dir, int index) {
   WriteIoRecordCsv(MakeIoRecord(c.validation.u, c.validation.y, c.validation.sample_time), base + "-val.csv");
   nlohmann::json truth = EffectToJson(c.effect);
   truth["effect"] = EffectName(c.truth);
+  truth["effects"] = nlohmann::json::array();
+  for (size_t i = 0; i < c.truths.size(); ++i) {
+    nlohmann::json e = EffectToJson(c.effects[i]);
+    e["effect"] = EffectName(c.truths[i]);
+    truth["effects"].push_back(e);
+  }
+  truth["input_offset"] = c.input_offset;
+  truth["output_offset"] = c.output_offset;
   truth["real"] = ModelToJson(c.real);
   truth["noise_sigma"] = c.noise_sigma;
   truth["excitation"] = c.excitation;
   std::ofstream(base + "-truth.json") << truth.dump(2) << "\n";
 }
 
-void RunBench(int cases, uint64_t seed, double snr_db, int samples, int jobs, bool json,
-              const std::string& dump_dir, const std::string& excitation) {
-  const auto& kinds = AllEffects();
-  std::vector<BenchOutcome> outcomes(cases);
+// The names in verdict.effects (one or two), or verdict.effect alone.
+std::vector<std::string> NamedEffects(const GapReport& report) {
+  const GapVerdict& v = report.verdict;
+  if (v.effect == "none" || v.effect == "ambiguous") return {v.effect};
+  std::vector<std::string> names;
+  for (const Effect& e : v.effects)
+    if (e.kind != EffectKind::kNone) names.push_back(EffectName(e.kind));
+  if (names.empty() || names.front() != v.effect) names.insert(names.begin(), v.effect);
+  names.erase(std::unique(names.begin(), names.end()), names.end());
+  return names;
+}
+
+struct BenchSettings {
+  int cases = 26, samples = 4000, jobs = 2;
+  uint64_t seed = 1;
+  double snr = 30, combos = 0;
+  bool json = false, offsets = false;
+  std::string dump, excitation;
+};
+
+std::string Rate(int num, int den) {
+  std::ostringstream s;
+  s << std::setprecision(3) << (den ? double(num) / den : 0.0) << " (" << num << "/" << den << ")";
+  return s.str();
+}
+
+void RunBench(const BenchSettings& b) {
+  BenchCaseTruth(0, b.combos);  // throws std::invalid_argument for a share outside [0, 1]
+  if (!b.dump.empty()) std::filesystem::create_directories(b.dump);
+  std::vector<GapBenchOutcome> outcomes(b.cases);
   std::atomic<int> next{0};
   std::mutex print;
   auto worker = [&] {
-    for (int i = next++; i < cases; i = next++) {
+    for (int i = next++; i < b.cases; i = next++) {
       // Each case has its own generator: the result does not depend on the thread schedule.
-      std::mt19937_64 rng(seed * 1000003ULL + static_cast<uint64_t>(i));
-      const EffectKind truth = kinds[i % kinds.size()];
+      std::mt19937_64 rng(b.seed * 1000003ULL + static_cast<uint64_t>(i));
+      const std::vector<EffectKind> truth = BenchCaseTruth(i, b.combos);
       GapCaseOptions options;
-      options.snr_db = snr_db;
-      options.samples = samples;
-      options.excitation = excitation;
+      options.snr_db = b.snr;
+      options.samples = b.samples;
+      options.excitation = b.excitation;
+      options.offsets = b.offsets;
       const GapCase c = MakeGapCase(truth, rng, options);
-      if (!dump_dir.empty()) WriteCase(c, dump_dir, i);
+      if (!b.dump.empty()) WriteCase(c, b.dump, i);
       const auto start = std::chrono::steady_clock::now();
       GapOptions diagnosis;
       diagnosis.threads = 1;  // the cases run in parallel instead
       const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, diagnosis);
-      BenchOutcome& o = outcomes[i];
+      GapBenchOutcome& o = outcomes[i];
       o.truth = truth;
       o.verdict = report.verdict.effect;
+      o.effects = NamedEffects(report);
       o.shrink = report.verdict.shrink;
       o.confidence = report.verdict.confidence;
       o.excitation = c.excitation;
       o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::string truth_label, named_label;
+      for (EffectKind k : truth) truth_label += (truth_label.empty() ? "" : "+") + std::string(EffectName(k));
+      for (const auto& n : o.effects) named_label += (named_label.empty() ? "" : "+") + n;
       std::lock_guard<std::mutex> lock(print);
-      std::cerr << "case " << i << ": truth " << EffectName(truth) << " (" << c.excitation
-                << "), verdict " << o.verdict << ", confidence " << std::setprecision(3)
-                << o.confidence << ", shrink " << o.shrink << ", " << o.seconds << " s\n";
+      std::cerr << "case " << i << ": truth " << truth_label << " (" << c.excitation
+                << "), verdict " << o.verdict << " [" << named_label << "], confidence "
+                << std::setprecision(3) << o.confidence << ", shrink " << o.shrink << ", "
+                << o.seconds << " s\n";
     }
   };
   std::vector<std::thread> threads;
-  for (int j = 0; j < std::max(1, jobs); ++j) threads.emplace_back(worker);
+  for (int j = 0; j < std::max(1, b.jobs); ++j) threads.emplace_back(worker);
   for (auto& t : threads) t.join();
 
-  std::map<std::string, std::map<std::string, int>> confusion;
-  std::map<std::string, std::pair<int, int>> by_excitation;  // correct, total
-  int correct = 0, none_cases = 0, false_alarms = 0;
-  std::vector<double> shrinks;
-  double total_seconds = 0;
-  for (const auto& o : outcomes) {
-    const std::string truth = EffectName(o.truth);
-    ++confusion[truth][o.verdict];
-    total_seconds += o.seconds;
-    ++by_excitation[o.excitation].second;
-    if (o.verdict == truth) {
-      ++by_excitation[o.excitation].first;
-      ++correct;
-      if (o.truth != EffectKind::kNone) shrinks.push_back(o.shrink);
-    }
-    if (o.truth == EffectKind::kNone) {
-      ++none_cases;
-      if (o.verdict != "none") ++false_alarms;
-    }
-  }
-  std::sort(shrinks.begin(), shrinks.end());
-  const double median_shrink = shrinks.empty() ? 0.0 : shrinks[shrinks.size() / 2];
-  const double accuracy = cases ? double(correct) / cases : 0.0;
-  const double false_alarm_rate = none_cases ? double(false_alarms) / none_cases : 0.0;
-  if (json) {
-    nlohmann::json out = {{"cases", cases}, {"seed", seed}, {"snr_db", snr_db}, {"samples", samples},
-                          {"top1_accuracy", accuracy}, {"false_alarm_rate", false_alarm_rate},
-                          {"median_shrink_correct", median_shrink},
-                          {"mean_seconds", cases ? total_seconds / cases : 0.0},
-                          {"confusion", confusion}};
-    for (const auto& [kind, counts] : by_excitation)
+  const GapBenchScore s = ScoreGapBench(outcomes);
+  if (b.json) {
+    nlohmann::json out = {{"cases", b.cases}, {"seed", b.seed}, {"snr_db", b.snr}, {"samples", b.samples},
+                          {"offsets", b.offsets}, {"combos", b.combos},
+                          {"single_cases", s.single_cases},
+                          {"top1_accuracy", s.top1_accuracy}, {"false_alarm_rate", s.false_alarm_rate},
+                          {"single_extra_effect", s.single_extra},
+                          {"combo_cases", s.combo_cases}, {"combo_both_named", s.combo_both_rate},
+                          {"combo_top1_either", s.combo_top1_rate},
+                          {"median_shrink_correct", s.median_shrink_correct},
+                          {"mean_seconds", s.mean_seconds},
+                          {"confusion", s.confusion}};
+    for (const auto& [kind, counts] : s.by_excitation)
       out["top1_by_excitation"][kind] = double(counts.first) / counts.second;
+    for (const auto& [pair, counts] : s.by_pair)
+      out["combo_both_by_pair"][pair] = double(counts.first) / counts.second;
     std::cout << out.dump(2) << "\n";
     return;
   }
-  std::cout << std::setprecision(3) << "cases " << cases << ", seed " << seed << ", SNR " << snr_db
-            << " dB, " << samples << " samples per record\n"
-            << "top-1 accuracy " << accuracy << " (" << correct << "/" << cases << ")\n"
-            << "false alarms on none " << false_alarm_rate << " (" << false_alarms << "/" << none_cases
-            << ")\n"
-            << "median validated shrink (right effect) " << median_shrink << "\n"
-            << "mean time per diagnosis " << (cases ? total_seconds / cases : 0.0) << " s\n";
-  for (const auto& [kind, counts] : by_excitation)
-    std::cout << "top-1 on " << kind << " excitation " << double(counts.first) / counts.second << " ("
-              << counts.first << "/" << counts.second << ")\n";
-  std::cout
-            << "confusion (rows: truth; columns: verdicts with counts)\n";
-  for (const auto& [truth, row] : confusion) {
+  std::cout << std::setprecision(3) << "cases " << b.cases << ", seed " << b.seed << ", SNR " << b.snr
+            << " dB, " << b.samples << " samples per record"
+            << (b.offsets ? ", actuator and sensor offsets" : "") << ", two-effect share " << b.combos
+            << "\n"
+            << "top-1 accuracy on single effects " << Rate(s.single_correct, s.single_cases) << "\n"
+            << "false alarms on none " << Rate(s.false_alarms, s.none_cases) << "\n";
+  if (s.combo_cases)
+    std::cout << "two-effect cases: both named " << Rate(s.combo_both, s.combo_cases)
+              << ", top-1 one of the two " << Rate(s.combo_either, s.combo_cases) << "\n";
+  std::cout << "median validated shrink (right effect) " << s.median_shrink_correct << "\n"
+            << "mean time per diagnosis " << s.mean_seconds << " s\n";
+  for (const auto& [kind, counts] : s.by_excitation)
+    std::cout << "top-1 on " << kind << " excitation " << Rate(counts.first, counts.second) << "\n";
+  for (const auto& [pair, counts] : s.by_pair)
+    std::cout << "both named on " << pair << " " << Rate(counts.first, counts.second) << "\n";
+  std::cout << "confusion (rows: truth; columns: named effects with counts)\n";
+  for (const auto& [truth, row] : s.confusion) {
     std::cout << "  " << std::left << std::setw(22) << truth;
     for (const auto& [verdict, count] : row) std::cout << " " << verdict << ":" << count;
     std::cout << "\n";
@@ -217,16 +240,9 @@ void RegisterGapCommand(CLI::App& app) {
       for (const auto& path : WriteGapReportSvgs(report, r->plots)) std::cout << "plot: " << path << "\n";
   });
 
-  struct BenchArgs {
-    int cases = 26, samples = 4000, jobs = 2;
-    uint64_t seed = 1;
-    double snr = 30;
-    bool json = false;
-    std::string dump, excitation;
-  };
-  auto b = std::make_shared<BenchArgs>();
+  auto b = std::make_shared<BenchSettings>();
   auto* bench = gap->add_subcommand(
-      "bench", "blind check: generate cases with a withheld effect, diagnose them, score the verdicts");
+      "bench", "blind check: generate cases with withheld effects, diagnose them, score the verdicts");
   bench->add_option("--cases", b->cases, "number of cases (the 13 effects in turn)")->check(CLI::PositiveNumber);
   bench->add_option("--seed", b->seed, "seed of the case generator");
   bench->add_option("--snr", b->snr, "output SNR in dB");
@@ -236,9 +252,12 @@ void RegisterGapCommand(CLI::App& app) {
   bench->add_option("--dump", b->dump, "also write each case (sim model, records, truth) to this directory");
   bench->add_option("--excitation", b->excitation, "levels, prbs or rbs for every case (default: drawn per case)")
       ->check(CLI::IsMember({"levels", "prbs", "rbs"}));
-  bench->callback([b] {
-    RunBench(b->cases, b->seed, b->snr, b->samples, b->jobs, b->json, b->dump, b->excitation);
-  });
+  bench->add_flag("--offsets", b->offsets,
+                  "random actuator offset (up to ±30 % of the command's peak) and sensor offset "
+                  "(10–100 % of the output range) on every case");
+  bench->add_option("--combos", b->combos,
+                    "share F in [0, 1] of the cases with two effects that occur together on rigs");
+  bench->callback([b] { RunBench(*b); });
 }
 
 }  // namespace idrig

@@ -87,7 +87,90 @@ Eigen::VectorXd Excitation(const std::string& kind, double bandwidth, double amp
   return u;
 }
 
+// What an effect's parameters are drawn against: the physical input and the linear output.
+struct SignalStats {
+  double u_max = 1, y_max = 1, y_hi = 1, y_lo = -1, y_mean = 0, bandwidth = 1, ts = 0.01;
+};
+
+// Random parameters of `kind`, scaled to the signals (parameter_mismatch moves `real`).
+Effect DrawEffect(EffectKind kind, std::mt19937_64& rng, const SignalStats& st,
+                  TransferFunction& real) {
+  const double sign = Uniform(rng, 0, 1) < 0.5 ? -1.0 : 1.0;
+  Effect e;
+  e.kind = kind;
+  const double slow = 1.0 / st.bandwidth;
+  const double u_max = st.u_max, y_max = st.y_max;
+  switch (kind) {
+    case EffectKind::kParameterMismatch:
+      for (int i = 1; i < real.den.size(); ++i)
+        real.den(i) *= 1 + (Uniform(rng, 0, 1) < 0.5 ? -1 : 1) * Uniform(rng, 0.1, 0.3);
+      real.num *= 1 + (Uniform(rng, 0, 1) < 0.5 ? -1 : 1) * Uniform(rng, 0.1, 0.3);
+      e.kind = EffectKind::kNone;
+      break;
+    case EffectKind::kTimeDelay:
+      e.params = {std::max(2 * st.ts, Uniform(rng, 0.1, 0.4) * slow)};
+      break;
+    case EffectKind::kActuatorLag: e.params = {Uniform(rng, 0.15, 0.6) * slow}; break;
+    case EffectKind::kUnmodelledResonance:
+      e.params = {std::min(Uniform(rng, 3.0, 8.0) * st.bandwidth, 0.3 * M_PI / st.ts),
+                  Uniform(rng, 0.05, 0.2)};
+      break;
+    case EffectKind::kInputSaturation:
+      e.params = {-Uniform(rng, 0.4, 0.8) * u_max, Uniform(rng, 0.4, 0.8) * u_max};
+      break;
+    case EffectKind::kDeadZone: e.params = {Uniform(rng, 0.1, 0.3) * u_max}; break;
+    case EffectKind::kBacklash: e.params = {Uniform(rng, 0.05, 0.2) * u_max}; break;
+    case EffectKind::kCoulombFriction: e.params = {Uniform(rng, 0.1, 0.3) * u_max}; break;
+    case EffectKind::kCubicStiffness:
+      e.params = {Uniform(rng, 0.2, 0.5) * u_max / std::pow(y_max, 3)};
+      break;
+    case EffectKind::kOutputSaturation:
+      e.params = {st.y_mean - Uniform(rng, 0.5, 0.8) * (st.y_mean - st.y_lo),
+                  st.y_mean + Uniform(rng, 0.5, 0.8) * (st.y_hi - st.y_mean)};
+      break;
+    case EffectKind::kSensorNonlinearity:
+      if (Uniform(rng, 0, 1) < 0.5) {
+        e.params = {1.0, 0.0, 0.0, 1.0};
+      } else {
+        e.params = {1.0, Uniform(rng, -0.2, 0.2) / y_max,
+                    sign * Uniform(rng, 0.1, 0.3) / (y_max * y_max), 0.0};
+      }
+      break;
+    case EffectKind::kOutputQuantization:
+      e.params = {Uniform(rng, 0.03, 0.1) * (st.y_hi - st.y_lo)};
+      break;
+    default:
+      break;
+  }
+  return e;
+}
+
+int Stage(EffectKind kind) {  // order in which effects act on the signal path
+  switch (kind) {
+    case EffectKind::kInputSaturation: return 0;
+    case EffectKind::kDeadZone: return 1;
+    case EffectKind::kBacklash: return 2;
+    case EffectKind::kOutputSaturation: return 5;
+    case EffectKind::kSensorNonlinearity: return 6;
+    case EffectKind::kOutputQuantization: return 7;
+    default: return 3;  // linear (folded into the plant) and feedback
+  }
+}
+
 }  // namespace
+
+const std::vector<std::pair<EffectKind, EffectKind>>& CoOccurringEffectPairs() {
+  static const std::vector<std::pair<EffectKind, EffectKind>> pairs = {
+      {EffectKind::kCoulombFriction, EffectKind::kInputSaturation},
+      {EffectKind::kDeadZone, EffectKind::kCubicStiffness},
+      {EffectKind::kBacklash, EffectKind::kOutputQuantization},
+      {EffectKind::kTimeDelay, EffectKind::kSensorNonlinearity},
+      {EffectKind::kActuatorLag, EffectKind::kInputSaturation},
+      {EffectKind::kCoulombFriction, EffectKind::kBacklash},
+      {EffectKind::kDeadZone, EffectKind::kActuatorLag},
+  };
+  return pairs;
+}
 
 Eigen::VectorXd SimulateRig(const TransferFunction& plant, const Effect& effect,
                             const Eigen::VectorXd& u, double sample_time, double noise_sigma,
@@ -107,11 +190,83 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const Effect& effect,
   return y;
 }
 
+Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Effect>& effects_in,
+                            const Eigen::VectorXd& u, double sample_time, double noise_sigma,
+                            std::mt19937_64& rng, double input_offset, double output_offset) {
+  if (effects_in.size() <= 1 && input_offset == 0 && output_offset == 0)
+    return SimulateRig(plant, effects_in.empty() ? Effect{} : effects_in.front(), u, sample_time,
+                       noise_sigma, rng);
+  std::vector<Effect> effects = effects_in;
+  std::stable_sort(effects.begin(), effects.end(),
+                   [](const Effect& a, const Effect& b) { return Stage(a.kind) < Stage(b.kind); });
+  Eigen::VectorXd w = u.array() + input_offset;
+  TransferFunction g = plant;
+  Effect feedback;
+  const Effect* quantizer = nullptr;
+  std::vector<const Effect*> output_maps;
+  for (const Effect& e : effects) {
+    ValidateEffect(e);
+    switch (e.kind) {
+      case EffectKind::kInputSaturation:
+        w = w.cwiseMax(e.params[0]).cwiseMin(e.params[1]);
+        break;
+      case EffectKind::kDeadZone:
+        for (long k = 0; k < w.size(); ++k) w(k) = DeadZone(w(k), e.params[0]);
+        break;
+      case EffectKind::kBacklash: w = Backlash(w, e.params[0]); break;
+      case EffectKind::kCoulombFriction:
+      case EffectKind::kCubicStiffness:
+        if (feedback.kind != EffectKind::kNone)
+          throw std::invalid_argument("rig simulation: at most one feedback effect (friction or "
+                                      "cubic stiffness) at a time");
+        feedback = e;
+        break;
+      case EffectKind::kOutputSaturation:
+      case EffectKind::kSensorNonlinearity: output_maps.push_back(&e); break;
+      case EffectKind::kOutputQuantization: quantizer = &e; break;
+      case EffectKind::kNone: break;
+      default: g = ApplyLinearEffect(g, e); break;
+    }
+  }
+  EffectSimulationOptions fine;
+  fine.substeps = 16;
+  Eigen::VectorXd y = SimulateWithEffect(g, feedback, w, sample_time, fine);
+  for (const Effect* e : output_maps) {
+    if (e->kind == EffectKind::kOutputSaturation) y = y.cwiseMax(e->params[0]).cwiseMin(e->params[1]);
+    else
+      for (long k = 0; k < y.size(); ++k) y(k) = SensorMap(y(k), e->params);
+  }
+  for (long k = 0; k < y.size(); ++k) {
+    y(k) += noise_sigma * Gaussian(rng);
+    if (quantizer) y(k) = quantizer->params[0] * std::round(y(k) / quantizer->params[0]);
+    y(k) += output_offset;
+  }
+  return y;
+}
+
 GapCase MakeGapCase(EffectKind truth, std::mt19937_64& rng, const GapCaseOptions& options) {
+  return MakeGapCase(std::vector<EffectKind>{truth}, rng, options);
+}
+
+GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
+                    const GapCaseOptions& options) {
+  if (truths.empty() || truths.size() > 2)
+    throw std::invalid_argument("gap case: give one or two effects, not " +
+                                std::to_string(truths.size()));
+  if (truths.size() == 2) {
+    if (truths[0] == truths[1] || truths[0] == EffectKind::kNone || truths[1] == EffectKind::kNone ||
+        truths[0] == EffectKind::kParameterMismatch || truths[1] == EffectKind::kParameterMismatch)
+      throw std::invalid_argument(std::string("gap case: the pair ") + EffectName(truths[0]) + " + " +
+                                  EffectName(truths[1]) + " is not two distinct effects of the library");
+    if (IsFeedbackEffect(truths[0]) && IsFeedbackEffect(truths[1]))
+      throw std::invalid_argument("gap case: at most one feedback effect in a pair");
+  }
   GapCase c;
-  c.truth = truth;
+  c.truth = truths.front();
+  c.truths = truths;
+  const EffectKind shape_of = truths.size() == 2 && IsFeedbackEffect(truths[1]) ? truths[1] : truths[0];
   double bandwidth = 1;
-  c.sim = RandomPlant(truth, rng, &bandwidth);
+  c.sim = RandomPlant(shape_of, rng, &bandwidth);
   c.real = c.sim;
   const char* kinds[3] = {"levels", "prbs", "rbs"};
   c.excitation = kinds[static_cast<int>(Uniform(rng, 0, 3)) % 3];
@@ -125,68 +280,124 @@ GapCase MakeGapCase(EffectKind truth, std::mt19937_64& rng, const GapCaseOptions
   const uint64_t seed = rng();
   const Eigen::VectorXd u_est = Excitation(c.excitation, bandwidth, amplitude, options, seed);
   const Eigen::VectorXd u_val = Excitation(c.excitation, bandwidth, amplitude, options, seed + 1);
-  const Eigen::VectorXd y_lin = SimulateWithEffect(c.sim, Effect{}, u_est, options.sample_time);
-  const double u_max = u_est.cwiseAbs().maxCoeff();
-  const double y_max = y_lin.cwiseAbs().maxCoeff();
-  const double y_hi = y_lin.maxCoeff(), y_lo = y_lin.minCoeff(), y_mean = y_lin.mean();
-  const double sign = Uniform(rng, 0, 1) < 0.5 ? -1.0 : 1.0;
-  Effect& e = c.effect;
-  e.kind = truth;
-  const double slow = 1.0 / bandwidth;
-  switch (truth) {
-    case EffectKind::kParameterMismatch:
-      for (int i = 1; i < c.real.den.size(); ++i)
-        c.real.den(i) *= 1 + (Uniform(rng, 0, 1) < 0.5 ? -1 : 1) * Uniform(rng, 0.1, 0.3);
-      c.real.num *= 1 + (Uniform(rng, 0, 1) < 0.5 ? -1 : 1) * Uniform(rng, 0.1, 0.3);
-      e.kind = EffectKind::kNone;
-      break;
-    case EffectKind::kTimeDelay:
-      e.params = {std::max(2 * options.sample_time, Uniform(rng, 0.1, 0.4) * slow)};
-      break;
-    case EffectKind::kActuatorLag: e.params = {Uniform(rng, 0.15, 0.6) * slow}; break;
-    case EffectKind::kUnmodelledResonance:
-      e.params = {std::min(Uniform(rng, 3.0, 8.0) * bandwidth, 0.3 * M_PI / options.sample_time),
-                  Uniform(rng, 0.05, 0.2)};
-      break;
-    case EffectKind::kInputSaturation:
-      e.params = {-Uniform(rng, 0.4, 0.8) * u_max, Uniform(rng, 0.4, 0.8) * u_max};
-      break;
-    case EffectKind::kDeadZone: e.params = {Uniform(rng, 0.1, 0.3) * u_max}; break;
-    case EffectKind::kBacklash: e.params = {Uniform(rng, 0.05, 0.2) * u_max}; break;
-    case EffectKind::kCoulombFriction: e.params = {Uniform(rng, 0.1, 0.3) * u_max}; break;
-    case EffectKind::kCubicStiffness:
-      e.params = {Uniform(rng, 0.2, 0.5) * u_max / std::pow(y_max, 3)};
-      break;
-    case EffectKind::kOutputSaturation:
-      e.params = {y_mean - Uniform(rng, 0.5, 0.8) * (y_mean - y_lo),
-                  y_mean + Uniform(rng, 0.5, 0.8) * (y_hi - y_mean)};
-      break;
-    case EffectKind::kSensorNonlinearity:
-      if (Uniform(rng, 0, 1) < 0.5) {
-        e.params = {1.0, 0.0, 0.0, 1.0};
-      } else {
-        e.params = {1.0, Uniform(rng, -0.2, 0.2) / y_max,
-                    sign * Uniform(rng, 0.1, 0.3) / (y_max * y_max), 0.0};
-      }
-      break;
-    case EffectKind::kOutputQuantization:
-      e.params = {Uniform(rng, 0.03, 0.1) * (y_hi - y_lo)};
-      break;
-    default:
-      break;
+  if (options.offsets) {
+    const double side = Uniform(rng, 0, 1) < 0.5 ? -1.0 : 1.0;
+    c.input_offset = side * Uniform(rng, 0.0, 0.3) * u_est.cwiseAbs().maxCoeff();
   }
+  // Effects are sized against the physical input (command + actuator offset).
+  const Eigen::VectorXd u_phys = u_est.array() + c.input_offset;
+  const Eigen::VectorXd y_lin = SimulateWithEffect(c.sim, Effect{}, u_phys, options.sample_time);
+  SignalStats st;
+  st.u_max = u_phys.cwiseAbs().maxCoeff();
+  st.y_max = y_lin.cwiseAbs().maxCoeff();
+  st.y_hi = y_lin.maxCoeff();
+  st.y_lo = y_lin.minCoeff();
+  st.y_mean = y_lin.mean();
+  st.bandwidth = bandwidth;
+  st.ts = options.sample_time;
+  for (EffectKind kind : truths) c.effects.push_back(DrawEffect(kind, rng, st, c.real));
+  c.effect = c.effects.front();
+  if (options.offsets) {
+    const double side = Uniform(rng, 0, 1) < 0.5 ? -1.0 : 1.0;
+    c.output_offset = side * Uniform(rng, 0.1, 1.0) * (st.y_hi - st.y_lo);
+  }
+  // Warm-up at zero command (the rig settles at its operating point), dropped from the records.
+  long warm = 0;
+  if (options.offsets) {
+    double slow = 1.0 / bandwidth;
+    for (const Effect& e : c.effects)
+      if (e.kind == EffectKind::kActuatorLag) slow += e.params[0];
+    warm = std::clamp<long>(static_cast<long>(10 * slow / options.sample_time), 100, 3000);
+  }
+  auto record = [&](const Eigen::VectorXd& u, double sigma, std::mt19937_64& g) {
+    Eigen::VectorXd padded = Eigen::VectorXd::Zero(warm + u.size());
+    padded.tail(u.size()) = u;
+    const Eigen::VectorXd y = SimulateRig(c.real, c.effects, padded, options.sample_time, sigma, g,
+                                          c.input_offset, c.output_offset);
+    return Eigen::VectorXd(y.tail(u.size()));
+  };
   // Noise from the SNR of the rig's own output on the estimation input.
   std::mt19937_64 quiet(0);
-  const Eigen::VectorXd y_clean = SimulateRig(c.real, e, u_est, options.sample_time, 0.0, quiet);
+  const Eigen::VectorXd y_clean = record(u_est, 0.0, quiet);
   const double rms = std::sqrt((y_clean.array() - y_clean.mean()).square().mean());
   c.noise_sigma = rms * std::pow(10.0, -options.snr_db / 20);
   c.estimation.u = u_est;
-  c.estimation.y = SimulateRig(c.real, e, u_est, options.sample_time, c.noise_sigma, rng);
+  c.estimation.y = record(u_est, c.noise_sigma, rng);
   c.estimation.sample_time = options.sample_time;
   c.validation.u = u_val;
-  c.validation.y = SimulateRig(c.real, e, u_val, options.sample_time, c.noise_sigma, rng);
+  c.validation.y = record(u_val, c.noise_sigma, rng);
   c.validation.sample_time = options.sample_time;
   return c;
+}
+
+std::vector<EffectKind> BenchCaseTruth(int index, double combo_share) {
+  if (index < 0) throw std::invalid_argument("gap bench: negative case index");
+  if (!(combo_share >= 0 && combo_share <= 1))
+    throw std::invalid_argument("gap bench: the share of two-effect cases must be in [0, 1]");
+  const auto combos_before = [&](long i) { return static_cast<long>(std::floor(i * combo_share + 1e-9)); };
+  const long before = combos_before(index);
+  if (combos_before(index + 1) > before) {
+    const auto& pairs = CoOccurringEffectPairs();
+    const auto& p = pairs[before % pairs.size()];
+    return {p.first, p.second};
+  }
+  const auto& kinds = AllEffects();
+  return {kinds[(index - before) % kinds.size()]};
+}
+
+namespace {
+std::string Label(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : "+") + n;
+  return s.empty() ? "none" : s;
+}
+}  // namespace
+
+GapBenchScore ScoreGapBench(const std::vector<GapBenchOutcome>& outcomes) {
+  GapBenchScore s;
+  std::vector<double> shrinks;
+  double seconds = 0;
+  for (const auto& o : outcomes) {
+    if (o.truth.empty()) throw std::invalid_argument("gap bench: an outcome without a truth");
+    ++s.cases;
+    seconds += o.seconds;
+    std::vector<std::string> truth;
+    for (EffectKind k : o.truth) truth.push_back(EffectName(k));
+    const std::vector<std::string> named = o.effects.empty() ? std::vector<std::string>{o.verdict} : o.effects;
+    ++s.confusion[Label(truth)][Label(named)];
+    auto has = [&](const std::string& n) { return std::find(named.begin(), named.end(), n) != named.end(); };
+    if (truth.size() == 1) {
+      ++s.single_cases;
+      ++s.by_excitation[o.excitation].second;
+      if (o.verdict == truth[0]) {
+        ++s.single_correct;
+        ++s.by_excitation[o.excitation].first;
+        if (named.size() > 1) ++s.single_extra;
+        if (o.truth[0] != EffectKind::kNone) shrinks.push_back(o.shrink);
+      }
+      if (o.truth[0] == EffectKind::kNone) {
+        ++s.none_cases;
+        if (o.verdict != "none") ++s.false_alarms;
+      }
+    } else {
+      ++s.combo_cases;
+      const std::string pair = Label(truth);
+      ++s.by_pair[pair].second;
+      if (has(truth[0]) && has(truth[1])) {
+        ++s.combo_both;
+        ++s.by_pair[pair].first;
+      }
+      if (o.verdict == truth[0] || o.verdict == truth[1]) ++s.combo_either;
+    }
+  }
+  std::sort(shrinks.begin(), shrinks.end());
+  s.median_shrink_correct = shrinks.empty() ? 0.0 : shrinks[shrinks.size() / 2];
+  s.top1_accuracy = s.single_cases ? double(s.single_correct) / s.single_cases : 0.0;
+  s.false_alarm_rate = s.none_cases ? double(s.false_alarms) / s.none_cases : 0.0;
+  s.combo_both_rate = s.combo_cases ? double(s.combo_both) / s.combo_cases : 0.0;
+  s.combo_top1_rate = s.combo_cases ? double(s.combo_either) / s.combo_cases : 0.0;
+  s.mean_seconds = s.cases ? seconds / s.cases : 0.0;
+  return s;
 }
 
 }  // namespace idrig

@@ -1,12 +1,17 @@
 #pragma once
-// Synthetic blind cases for the gap diagnosis: a random plant G0 (the "sim model"), a withheld
-// effect with random parameters added to it (the "real rig"), output noise at a chosen SNR, and
+// Synthetic blind cases for the gap diagnosis: a random plant G0 (the "sim model"), one or two
+// withheld effects with random parameters added to it (the "real rig"), optionally random
+// actuator and sensor offsets (an operating point), output noise at a chosen SNR, and
 // estimation and validation records from independent excitation realisations of one of three
 // kinds (multisine at three amplitude levels with steps; PRBS; random binary). The generator
 // simulates the rig more finely than the diagnosis does (feedback effects with 16 sub-steps),
-// and the diagnosis never sees the case's truth.
+// and the diagnosis never sees the case's truth. The bench's plan (which case has which
+// effects) and its scores are here too, so that every front end scores alike.
+#include <map>
 #include <random>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/numeric/gap/effects.h"
 #include "core/numeric/gap/gap_diagnosis.h"
@@ -18,24 +23,86 @@ struct GapCaseOptions {
   int samples = 4000;          // per record
   double sample_time = 0.01;   // [s]
   std::string excitation;      // "levels", "prbs", "rbs"; empty: drawn at random per case
+  // Random operating point: an actuator offset (added to the command before every input-side
+  // effect) of up to ±30 % of the command's peak, and a sensor offset (added to the reading)
+  // of 10–100 % of the output's range, either sign; the records start with the rig settled at
+  // the operating point (a warm-up at zero command is simulated and dropped).
+  bool offsets = false;
 };
 
 struct GapCase {
-  EffectKind truth = EffectKind::kNone;
-  Effect effect;               // the withheld effect (for parameter_mismatch: none; see real)
+  EffectKind truth = EffectKind::kNone;   // the first (or only) withheld effect
+  std::vector<EffectKind> truths;         // every withheld effect: one, or a co-occurring pair
+  Effect effect;               // the first withheld effect (parameter_mismatch: none; see real)
+  std::vector<Effect> effects; // every withheld effect, in the order of `truths`
   TransferFunction sim;        // what the user's simulation says
   TransferFunction real;       // the rig's linear part
   std::string excitation;      // "levels", "prbs" or "rbs"
   double noise_sigma = 0;
+  double input_offset = 0;     // actuator offset [units of u]
+  double output_offset = 0;    // sensor offset [units of y], added after the ADC
   GapRecord estimation, validation;
 };
 
 GapCase MakeGapCase(EffectKind truth, std::mt19937_64& rng, const GapCaseOptions& options = {});
+// One or two withheld effects (two: each drawn as for a single case, acting together on the rig;
+// parameter_mismatch may not be one of a pair). Throws std::invalid_argument otherwise.
+GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
+                    const GapCaseOptions& options = {});
 
-// The rig's output for input u: the linear part with the effect, output noise, and for
-// quantisation the noise before the rounding (a noisy signal digitised by an ADC).
+// Pairs of effects that occur together on rigs (the bench's two-effect cases, in turn):
+// friction + actuator saturation (servo axes), dead zone + cubic spring (valve overlap on a
+// stiffening suspension), backlash + quantisation (gear train read by an encoder), time delay +
+// sensor nonlinearity (transport delay read by a nonlinear probe), actuator lag + saturation
+// (a limited, slow amplifier), friction + backlash (geared drives), dead zone + actuator lag
+// (a hydraulic valve with overlap and spool dynamics).
+const std::vector<std::pair<EffectKind, EffectKind>>& CoOccurringEffectPairs();
+
+// The rig's output for input u: the linear part with the effects, output noise, and for
+// quantisation the noise before the rounding (a noisy signal digitised by an ADC). Several
+// effects act in stage order: actuator offset, input maps (saturation, dead zone, backlash),
+// the linear effects folded into the plant, one feedback effect (friction or cubic stiffness),
+// output maps (saturation, sensor), noise, ADC (quantisation), sensor offset.
 Eigen::VectorXd SimulateRig(const TransferFunction& plant, const Effect& effect,
                             const Eigen::VectorXd& u, double sample_time, double noise_sigma,
                             std::mt19937_64& rng);
+Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Effect>& effects,
+                            const Eigen::VectorXd& u, double sample_time, double noise_sigma,
+                            std::mt19937_64& rng, double input_offset = 0,
+                            double output_offset = 0);
+
+// The bench's plan: case `index` has a pair (CoOccurringEffectPairs in turn) for a share
+// `combo_share` of the cases, spread evenly, and otherwise a single effect (the vocabulary in
+// turn). combo_share = 0 gives the vocabulary in turn (index mod 13).
+std::vector<EffectKind> BenchCaseTruth(int index, double combo_share);
+
+// What a diagnosis said about one case, and its scores.
+struct GapBenchOutcome {
+  std::vector<EffectKind> truth;        // one or two
+  std::string verdict;                  // verdict.effect (may be "ambiguous")
+  std::vector<std::string> effects;     // verdict.effects' names (one or two)
+  std::string excitation;
+  double shrink = 0, confidence = 0, seconds = 0;
+};
+
+struct GapBenchScore {
+  int cases = 0;
+  int single_cases = 0, single_correct = 0;  // top-1: verdict.effect == the withheld effect
+  int single_extra = 0;        // right top-1 but a second (spurious) effect named as well
+  int none_cases = 0, false_alarms = 0;      // none withheld, something else named
+  int combo_cases = 0, combo_both = 0;       // both withheld effects in verdict.effects
+  int combo_either = 0;                      // verdict.effect is one of the two
+  double top1_accuracy = 0;    // single_correct / single_cases
+  double false_alarm_rate = 0; // false_alarms / none_cases
+  double combo_both_rate = 0, combo_top1_rate = 0;
+  double median_shrink_correct = 0;  // over single cases with the right verdict (not none)
+  double mean_seconds = 0;
+  // rows: the truth ("a" or "a+b"); columns: the named effects ("x" or "x+y") with counts.
+  std::map<std::string, std::map<std::string, int>> confusion;
+  std::map<std::string, std::pair<int, int>> by_excitation;  // single cases: right, total
+  std::map<std::string, std::pair<int, int>> by_pair;        // pair cases: both named, total
+};
+
+GapBenchScore ScoreGapBench(const std::vector<GapBenchOutcome>& outcomes);
 
 }  // namespace idrig

@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "core/numeric/gap/effects.h"
+#include "core/numeric/gap/gap_noise.h"
 #include "core/numeric/io_record.h"
 #include "core/numeric/model/lti_model.h"
 
@@ -77,7 +78,10 @@ struct GapFactor {
 
 struct GapWhere {
   double nrmse_before = 0;       // G0 on all records, simulation NRMSE
-  double noise_nrmse = 0;        // noise floor as NRMSE (from the best candidate's residual)
+  double noise_nrmse = 0;        // noise floor as NRMSE (noise_floor.sigma / spread of y_val)
+  NoiseFloor noise_floor;        // how the floor was estimated (without the candidates)
+  DetectionLines detection_lines;  // even/odd lines of a periodic odd multisine (if any)
+  OutputLattice lattice;         // the lattice the output samples sit on (quantisation)
   double gap_to_noise = 0;       // RMS(y − ŷ0) / σ̂
   bool gap_significant = false;
   bool residual_white = false, residual_independent = false;  // tests on y − ŷ0
@@ -129,7 +133,10 @@ struct GapVerdict {
   std::vector<std::string> tied; // the two candidates when ambiguous
   double confidence = 0;         // BIC weight of the verdict among all candidates
   double nrmse_before = 0, nrmse_after = 0;  // validation records
-  double shrink = 0;             // (before − after)/(before − noise floor), in [0, 1] mostly
+  double shrink = 0;             // (before − after)/(before − noise floor): ≤ 1 unless below_noise_floor
+  double noise_nrmse = 0;        // the independent noise floor as an NRMSE (where.noise_floor)
+  double remaining_gap_to_noise = 0;  // nrmse_after − noise_nrmse: what is left beyond the noise
+  bool below_noise_floor = false;     // nrmse_after < noise_nrmse (shrink may then exceed 1)
   Effect params;
   std::vector<double> param_std;
   TransferFunction plant;        // the adjusted linear part

@@ -378,9 +378,18 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
               [&](size_t i) { return std::string("fitting ") + EffectName(kinds[i]); });
   report.ranking = RankCandidates(work, options);
 
-  // Noise floor: the smallest estimation residual among the candidates.
-  double noise_mse = std::numeric_limits<double>::infinity();
-  for (const auto& c : report.ranking) noise_mse = std::min(noise_mse, c.estimation_mse);
+  // Noise floor, estimated without the candidates (gap_noise.h); records too short for it fall
+  // back to the smallest estimation residual among the candidates (said in the method).
+  NoiseFloor floor;
+  try {
+    floor = EstimateNoiseFloor(estimation, validation);
+  } catch (const std::invalid_argument&) {
+    double noise_mse = std::numeric_limits<double>::infinity();
+    for (const auto& c : report.ranking) noise_mse = std::min(noise_mse, c.estimation_mse);
+    floor.method = "best_candidate_residual";
+    floor.sigma = std::sqrt(noise_mse);
+    floor.samples = n_est;
+  }
   const double y_val_spread = (y_val.array() - y_val.mean()).matrix().norm() / std::sqrt(double(n_val));
 
   const CandidateFit& top = report.ranking.front();
@@ -389,7 +398,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   AdoptCandidate(top, v);
   v.params = top.effect;
   v.nrmse_before = Nrmse(y_val, y0_val)(0);
-  const double noise_nrmse = std::sqrt(noise_mse) / std::max(y_val_spread, 1e-300);
+  const double noise_nrmse = floor.sigma / std::max(y_val_spread, 1e-300);
   if (report.ranking.size() > 1 && report.ranking[1].eligible &&
       report.ranking[1].bic - top.bic < options.ambiguity_bic) {
     v.effect = "ambiguous";
@@ -457,8 +466,11 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
       }
     if (first) SelectSecondEffect(ctx, *first, top.bic, kinds, report);
   }
-  const double explainable = v.nrmse_before - noise_nrmse;
-  v.shrink = explainable > 0 ? (v.nrmse_before - v.nrmse_after) / explainable : 0.0;
+  std::vector<GapRecord> all_records = estimation;
+  all_records.insert(all_records.end(), validation.begin(), validation.end());
+  const OutputLattice lattice = DetectOutputLattice(all_records, ctx.q_step, floor.sigma);
+  NameLatticeQuantisation(lattice, noise_nrmse, report);
+  ApplyNoiseFloor(noise_nrmse, v);  // after the second effect: nrmse_after is final
   if (v.effect == "none")
     v.explanation = "no candidate explains the gap better than noise: G0 fits within the noise";
   else if (v.effect == "unmodelled_dynamics")
@@ -479,8 +491,11 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
                     " % of the explainable gap on the validation records";
   }
 
-  report.where = LocateGap(g0, validation, std::sqrt(noise_mse));
+  report.where = LocateGap(g0, validation, floor.sigma);
   report.where.noise_nrmse = noise_nrmse;
+  report.where.noise_floor = floor;
+  report.where.lattice = lattice;
+  report.where.detection_lines = AnalyseDetectionLines(all_records, &g0);
   return report;
 }
 

@@ -1,0 +1,138 @@
+// The blind-case generator's operating points and effect pairs, the bench's plan and its scores.
+// References: superposition of a linear plant (offsets), the lattice an ADC puts its readings
+// on, the stage order of a sensor after a delay, and counts made by hand.
+#include "core/numeric/gap/gap_bench.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "core/numeric/model/lti_model.h"
+
+namespace idrig {
+namespace {
+
+TEST(GapBenchTest, OffsetsShiftALinearRigByTheSteadyStateOfTheActuatorOffsetAndTheSensorOffset) {
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    std::mt19937_64 rng(seed);
+    GapCaseOptions options;
+    options.samples = 1500;
+    options.offsets = true;
+    options.snr_db = 40;
+    const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
+    const double u_peak = c.estimation.u.cwiseAbs().maxCoeff();
+    EXPECT_LE(std::abs(c.input_offset), 0.3 * u_peak + 1e-12);
+    EXPECT_GT(std::abs(c.output_offset), 0.0);
+    // Superposition: settled at G(0)·u_off before the record starts, so y = G u + G(0) u_off + y_off.
+    const double dc = c.real.num(c.real.num.size() - 1) / c.real.den(c.real.den.size() - 1);
+    const Eigen::VectorXd lin = Simulate(c.real, c.estimation.u, c.estimation.sample_time).col(0);
+    const Eigen::VectorXd e = c.estimation.y - lin - Eigen::VectorXd::Constant(lin.size(), dc * c.input_offset + c.output_offset);
+    const double rms = std::sqrt(e.squaredNorm() / e.size());
+    EXPECT_NEAR(rms, c.noise_sigma, 0.15 * c.noise_sigma) << "seed " << seed;
+    // The sensor offset is a sizeable share of the output's range.
+    const double range = c.estimation.y.maxCoeff() - c.estimation.y.minCoeff();
+    EXPECT_GT(std::abs(c.output_offset), 0.05 * range);
+  }
+}
+
+TEST(GapBenchTest, BacklashWithQuantisationReadsOnALatticeOffsetByTheSensorOffset) {
+  std::mt19937_64 rng(7);
+  GapCaseOptions options;
+  options.samples = 1000;
+  options.offsets = true;
+  const GapCase c = MakeGapCase({EffectKind::kBacklash, EffectKind::kOutputQuantization}, rng, options);
+  ASSERT_EQ(c.effects.size(), 2u);
+  EXPECT_EQ(c.effects[0].kind, EffectKind::kBacklash);
+  const double q = c.effects[1].params.at(0);
+  for (long k = 0; k < c.estimation.y.size(); ++k) {
+    const double level = (c.estimation.y(k) - c.output_offset) / q;
+    ASSERT_NEAR(level, std::round(level), 1e-6) << "sample " << k;
+  }
+}
+
+TEST(GapBenchTest, TwoEffectsActInStageOrder) {
+  // A delay on the input and a sensor map on the output, given in either order: the sensor reads
+  // the delayed linear output.
+  TransferFunction plant;
+  plant.num = Eigen::VectorXd::Constant(1, 4.0);
+  plant.den = Eigen::Vector3d(1.0, 1.2, 4.0);
+  const Effect delay{EffectKind::kTimeDelay, {0.05}};
+  const Effect sensor{EffectKind::kSensorNonlinearity, {1.0, 0.1, -0.2, 0.0}};
+  Eigen::VectorXd u(400);
+  for (long k = 0; k < u.size(); ++k) u(k) = std::sin(0.05 * k) + 0.3 * std::sin(0.31 * k);
+  std::mt19937_64 rng(1);
+  const Eigen::VectorXd y = SimulateRig(plant, {sensor, delay}, u, 0.01, 0.0, rng);
+  const Eigen::VectorXd delayed = Simulate(ApplyLinearEffect(plant, delay), u, 0.01).col(0);
+  for (long k = 0; k < u.size(); ++k) EXPECT_NEAR(y(k), SensorMap(delayed(k), sensor.params), 1e-6);
+}
+
+TEST(GapBenchTest, ThePlanHasTheRequestedShareOfPairsSpreadEvenly) {
+  const auto& kinds = AllEffects();
+  for (int i = 0; i < 30; ++i) {
+    const auto t = BenchCaseTruth(i, 0.0);
+    ASSERT_EQ(t.size(), 1u);
+    EXPECT_EQ(t[0], kinds[i % kinds.size()]);
+  }
+  int pairs = 0, longest_run = 0, run = 0;
+  std::set<std::pair<EffectKind, EffectKind>> seen;
+  for (int i = 0; i < 100; ++i) {
+    const auto t = BenchCaseTruth(i, 0.4);
+    if (t.size() == 2) {
+      ++pairs;
+      seen.insert({t[0], t[1]});
+      run = 0;
+    } else {
+      longest_run = std::max(longest_run, ++run);
+    }
+  }
+  EXPECT_EQ(pairs, 40);
+  EXPECT_LE(longest_run, 2);
+  EXPECT_EQ(seen.size(), CoOccurringEffectPairs().size());
+  for (const auto& [a, b] : CoOccurringEffectPairs()) {
+    std::mt19937_64 rng(3);
+    GapCaseOptions options;
+    options.samples = 600;
+    EXPECT_NO_THROW(MakeGapCase({a, b}, rng, options)) << EffectName(a) << " + " << EffectName(b);
+  }
+}
+
+TEST(GapBenchTest, ScoresCountBothNamedOrderFreeAndTopOneAsEitherOfThePair) {
+  std::vector<GapBenchOutcome> o(6);
+  o[0] = {{EffectKind::kDeadZone}, "dead_zone", {"dead_zone"}, "levels"};
+  o[1] = {{EffectKind::kNone}, "backlash", {"backlash"}, "prbs"};
+  o[2] = {{EffectKind::kNone}, "none", {}, "prbs"};  // no effects list: verdict.effect alone
+  o[3] = {{EffectKind::kBacklash, EffectKind::kOutputQuantization}, "output_quantization",
+          {"output_quantization", "backlash"}, "levels"};
+  o[4] = {{EffectKind::kBacklash, EffectKind::kOutputQuantization}, "backlash", {"backlash"}, "rbs"};
+  o[5] = {{EffectKind::kDeadZone, EffectKind::kCubicStiffness}, "time_delay",
+          {"time_delay", "dead_zone"}, "rbs"};
+  const GapBenchScore s = ScoreGapBench(o);
+  EXPECT_EQ(s.single_cases, 3);
+  EXPECT_EQ(s.single_correct, 2);
+  EXPECT_EQ(s.none_cases, 2);
+  EXPECT_EQ(s.false_alarms, 1);
+  EXPECT_EQ(s.combo_cases, 3);
+  EXPECT_EQ(s.combo_both, 1);
+  EXPECT_EQ(s.combo_either, 2);
+  EXPECT_DOUBLE_EQ(s.combo_both_rate, 1.0 / 3);
+  EXPECT_EQ(s.confusion.at("backlash+output_quantization").at("output_quantization+backlash"), 1);
+  EXPECT_EQ(s.by_pair.at("backlash+output_quantization").first, 1);
+}
+
+TEST(GapBenchTest, BadPairsAndSharesAreNamed) {
+  std::mt19937_64 rng(1);
+  try {
+    MakeGapCase({EffectKind::kCoulombFriction, EffectKind::kCubicStiffness}, rng);
+    FAIL() << "two feedback effects accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("feedback"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(MakeGapCase({EffectKind::kParameterMismatch, EffectKind::kDeadZone}, rng), std::invalid_argument);
+  EXPECT_THROW(MakeGapCase(std::vector<EffectKind>{}, rng), std::invalid_argument);
+  EXPECT_THROW(BenchCaseTruth(0, 1.5), std::invalid_argument);
+  EXPECT_THROW(ScoreGapBench({GapBenchOutcome{}}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace idrig

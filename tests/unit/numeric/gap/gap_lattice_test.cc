@@ -1,0 +1,70 @@
+// The output lattice (gap_noise.h, DetectOutputLattice): an ADC's readings sit on offset + k·q
+// whatever the noise before it; the lattice of numbers printed with few digits sits far below
+// the noise and is not quantisation. References: the construction of the records.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/numeric/gap/gap_bench.h"
+#include "core/numeric/gap/gap_internal.h"
+#include "core/numeric/gap/gap_noise.h"
+
+namespace idrig {
+namespace {
+
+TEST(GapLatticeTest, FindsTheStepAndOffsetOfAnAdcEvenWithNoiseAsLargeAsTheStep) {
+  for (double snr : {30.0, 20.0}) {
+    std::mt19937_64 rng(9);
+    GapCaseOptions options;
+    options.samples = 2000;
+    options.offsets = true;
+    options.snr_db = snr;
+    const GapCase c = MakeGapCase(EffectKind::kOutputQuantization, rng, options);
+    const double q = c.effect.params[0];
+    double strength = 0;
+    const double step = gap_detail::QuantisationStep({c.estimation}, &strength);
+    EXPECT_NEAR(step, q, 0.002 * q) << "SNR " << snr;
+    const NoiseFloor floor = EstimateNoiseFloor({c.estimation}, {c.validation});
+    const OutputLattice l = DetectOutputLattice({c.estimation, c.validation}, step, floor.sigma);
+    EXPECT_TRUE(l.lattice) << l.reason;
+    EXPECT_TRUE(l.detected) << l.reason;
+    EXPECT_GT(l.on_lattice, 0.99);
+    // The sensor offset, modulo the step, is the lattice's offset.
+    const double expected = std::fmod(std::fmod(c.output_offset, q) + q, q);
+    const double diff = std::remainder(l.offset - expected, q);
+    EXPECT_LT(std::abs(diff), 0.02 * q) << "offset " << l.offset << " expected " << expected;
+  }
+}
+
+TEST(GapLatticeTest, ContinuousDataPrintedWithFewDigitsIsNotQuantisation) {
+  std::mt19937_64 rng(4);
+  GapCaseOptions options;
+  options.samples = 2000;
+  GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
+  // Printed with 4 decimals: a lattice of 1e-4, a hundredth of the noise or less.
+  ASSERT_GT(c.noise_sigma, 0.01 * 1e2 * 1e-4);
+  for (GapRecord* r : {&c.estimation, &c.validation})
+    for (long k = 0; k < r->y.size(); ++k) r->y(k) = std::round(r->y(k) * 1e4) / 1e4;
+  const NoiseFloor floor = EstimateNoiseFloor({c.estimation}, {c.validation});
+  const OutputLattice printed = DetectOutputLattice({c.estimation, c.validation}, 1e-4, floor.sigma);
+  EXPECT_TRUE(printed.lattice);
+  EXPECT_FALSE(printed.detected) << printed.reason;
+  EXPECT_NE(printed.reason.find("resolution of the numbers"), std::string::npos) << printed.reason;
+  // The search itself does not find a coarse lattice in such data.
+  double strength = 0;
+  const double step = gap_detail::QuantisationStep({c.estimation}, &strength);
+  const OutputLattice found = DetectOutputLattice({c.estimation, c.validation}, step, floor.sigma);
+  EXPECT_FALSE(found.lattice) << found.reason;
+  EXPECT_FALSE(found.detected);
+}
+
+TEST(GapLatticeTest, NoStepNoLattice) {
+  GapRecord r;
+  r.u = Eigen::VectorXd::LinSpaced(100, 0, 1);
+  r.y = r.u;
+  r.sample_time = 0.01;
+  EXPECT_FALSE(DetectOutputLattice({r}, 0.0, 0.1).lattice);
+}
+
+}  // namespace
+}  // namespace idrig
