@@ -80,6 +80,8 @@ const char* ExperimentStateName(int32_t state) {
       return "stopped";
     case experiment_status_t::STATE_FAILED:
       return "failed";
+    case experiment_status_t::STATE_INTERRUPTED:
+      return "interrupted";
   }
   return "unknown";
 }
