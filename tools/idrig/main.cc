@@ -15,7 +15,11 @@ int main(int argc, char** argv) {
   idrig::RegisterExampleCommand(app);
   idrig::RegisterSimulateCommand(app);
   idrig::RegisterExciteCommand(app);
-  idrig::RegisterServiceCommands(app);
+  idrig::RegisterDemoCommand(app);
+  idrig::RegisterExperimentCommands(app);
+  idrig::RegisterModelsCommands(app);
+  idrig::RegisterStatusCommand(app);
+  idrig::RegisterSpyCommand(app);
   idrig::SetCommandLine(argc, argv);
   idrig::RegisterGapCommand(app);
   try {

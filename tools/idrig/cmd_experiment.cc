@@ -1,0 +1,102 @@
+// `idrig experiment start|status|stop`: experiments on a rig through idrig-excite.
+#include <iostream>
+#include <memory>
+
+#include "core/transport/channels.h"
+#include "core/transport/signing.h"
+#include "tools/idrig/commands.h"
+#include "tools/idrig/service_client.h"
+
+namespace idrig {
+
+void RegisterExperimentCommands(CLI::App& app) {
+  // ---- experiment start|status|stop
+  {
+    auto* group = app.add_subcommand("experiment", "start, watch or stop experiments on a rig");
+    group->require_subcommand(1);
+    struct Args {
+      std::string url = DefaultLcmUrl(), rig = "sim1", signal;
+      double fs = 10, duration = 10, speed = 1, max_abs = 0, seconds = 1.5;
+      int64_t experiment = 0;
+      bool wait = false;
+    };
+    auto args = std::make_shared<Args>();
+    auto* start =
+        group->add_subcommand("start", "publish an experiment request (prints the experiment id)");
+    auto* status =
+        group->add_subcommand("status", "listen for experiment status and print the latest");
+    auto* stop =
+        group->add_subcommand("stop", "stop a running experiment (the rig goes to its safe input)");
+    for (auto* c : {start, status, stop}) {
+      c->add_option("--url", args->url, "LCM URL (default $LCM_DEFAULT_URL or udpm ttl=0)");
+      c->add_option("--rig", args->rig, "rig id");
+    }
+    start->add_option("--signal", args->signal, "excitation SPEC (docs/excitation.md)")->required();
+    start->add_option("--fs", args->fs, "sample rate [Hz]")->check(CLI::PositiveNumber);
+    start->add_option("--duration", args->duration, "experiment length [s]")
+        ->check(CLI::PositiveNumber);
+    start->add_option("--speed", args->speed, "experiment time / wall time (simulated rigs)")
+        ->check(CLI::PositiveNumber);
+    start->add_option("--max-abs", args->max_abs, "lower |u| limit for this experiment")
+        ->check(CLI::NonNegativeNumber);
+    start->add_option("--experiment", args->experiment, "experiment id (default: from the clock)");
+    start->add_flag("--wait", args->wait, "wait until the rig reports the end");
+    status->add_option("--experiment", args->experiment, "only this experiment");
+    status->add_option("--seconds", args->seconds, "how long to listen");
+    stop->add_option("--experiment", args->experiment, "experiment id")->required();
+    start->callback([args] {
+      ValidateRigId(args->rig);
+      ServiceClient client(args->url);
+      const int64_t id = args->experiment > 0 ? args->experiment : NewId();
+      const int64_t request_id = client.StartExperiment(args->rig, id, args->signal, args->fs,
+                                                        args->duration, args->speed, args->max_abs);
+      std::cout << id << "\n" << std::flush;
+      if (!args->wait) return;
+      for (int i = 0; i < 100000; ++i) {
+        client.Spin(200);
+        const auto* ex = client.ExperimentStatus(args->rig, id, "excite");
+        if (!ex && i % 5 == 4)  // not heard of yet: the same request again (idempotent)
+          client.StartExperiment(args->rig, id, args->signal, args->fs, args->duration, args->speed,
+                                 args->max_abs, request_id);
+        const auto* rs = client.ExperimentStatus(args->rig, id, "rig");
+        if (ex && ex->state == experiment_status_t::STATE_FAILED)
+          throw std::invalid_argument("experiment refused: " + ex->message);
+        if (rs && rs->state >= experiment_status_t::STATE_DONE) {
+          std::cerr << "experiment " << id << " " << ExperimentStateName(rs->state) << ": "
+                    << rs->samples_total << " samples, " << rs->blocks_total << " blocks "
+                    << rs->message << "\n";
+          if (rs->state != experiment_status_t::STATE_DONE)
+            throw std::runtime_error("experiment did not complete");
+          return;
+        }
+        if (i == 0 && !ex) std::cerr << "waiting for idrig-excite on rig " << args->rig << "…\n";
+      }
+    });
+    status->callback([args] {
+      ServiceClient client(args->url);
+      client.Spin(static_cast<int>(args->seconds * 1000));
+      int shown = 0;
+      for (const auto& [key, s] : client.experiments()) {
+        if (s.rig_id != args->rig || (args->experiment && s.experiment_id != args->experiment))
+          continue;
+        std::cout << s.rig_id << " experiment " << s.experiment_id << " [" << s.source << "] "
+                  << ExperimentStateName(s.state) << " " << s.samples_done << "/" << s.samples_total
+                  << " samples"
+                  << (s.source == "rig" ? ", " + std::to_string(s.blocks_total) + " blocks" : "")
+                  << (s.signal_spec.empty() ? "" : ", " + s.signal_spec)
+                  << (s.message.empty() ? "" : " — " + s.message) << "\n";
+        ++shown;
+      }
+      if (!shown)
+        std::cout << "no experiment status heard on rig " << args->rig << " within "
+                  << args->seconds << " s\n";
+    });
+    stop->callback([args] {
+      ServiceClient client(args->url);
+      client.StopExperiment(args->rig, args->experiment);
+      client.Spin(200);
+    });
+  }
+}
+
+}  // namespace idrig
