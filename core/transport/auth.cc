@@ -4,6 +4,7 @@
 #include <openssl/crypto.h>
 #include <openssl/hmac.h>
 #include <pwd.h>
+#include <sys/stat.h>
 #include <spdlog/spdlog.h>
 #include <unistd.h>
 
@@ -35,6 +36,8 @@ KeyRing KeyRing::FromConfig(const nlohmann::json& config) {
 ReplayStore::ReplayStore(std::string path, double window_s)
     : path_(std::move(path)), window_s_(window_s) {
   if (path_.empty()) return;
+  const size_t slash = path_.find_last_of('/');
+  if (slash != std::string::npos && slash > 0) mkdir(path_.substr(0, slash).c_str(), 0700);
   Load();
   Compact();
 }

@@ -97,14 +97,15 @@ void CatalogService::Reply(const std::string& rig_id, int64_t request_id, int64_
 void CatalogService::ReplyWithJobState(const JobRecord& job) {
   int64_t model_id = 0;
   int32_t state = request_reply_t::STATE_ACCEPTED;
+  std::string message = job.message.empty() ? "job " + job.state : job.message;
   if (job.state == "done") {
     state = request_reply_t::STATE_DONE;
     if (auto m = catalog_.ModelForRequest(job.request_id)) model_id = m->model_id;
+    message = "by " + job.worker_id + ", attempt " + std::to_string(job.attempts);
   } else if (job.state == "failed") {
     state = request_reply_t::STATE_FAILED;
   }
-  Reply(job.rig_id, job.request_id, job.experiment_id, state, model_id,
-        job.message.empty() ? "job " + job.state : job.message);
+  Reply(job.rig_id, job.request_id, job.experiment_id, state, model_id, message);
 }
 
 void CatalogService::OnIdentifyRequest(const std::string& channel, const uint8_t* data,

@@ -47,8 +47,8 @@ RigSim::RigSim(Transport& transport, RigSimConfig config)
     : transport_(transport),
       config_(std::move(config)),
       reporter_(transport, "rig_sim", "rig_sim-" + config_.rig_id),
-      command_marks_(config_.state_dir.empty() ? "" : config_.state_dir + "/commands.hwm"),
       journal_(config_.state_dir),
+      command_marks_(config_.state_dir.empty() ? "" : config_.state_dir + "/commands.hwm"),
       meas_channel_(Channel(config_.rig_id, ChannelKind::kMeasurement)),
       status_channel_(Channel(config_.rig_id, ChannelKind::kExperimentStatus)),
       rng_(config_.seed) {

@@ -92,8 +92,8 @@ class RigSim {
   Transport& transport_;
   RigSimConfig config_;
   StatusReporter reporter_;
+  RigJournal journal_;  // before command_marks_: it creates the state directory
   ReplayStore command_marks_;
-  RigJournal journal_;
   CommandVerifier verifier_;
   std::string meas_channel_, status_channel_;
   std::mt19937_64 rng_;
