@@ -49,15 +49,8 @@ std::vector<ExperimentRecord> Catalog::Experiments(const std::string& rig_id) {
   std::vector<ExperimentRecord> out;
   while (s.Step()) {
     ExperimentRecord e;
-    e.rig_id = s.Text(0);
-    e.experiment_id = s.Int(1);
-    e.signal_spec = s.Text(2);
-    e.sample_rate_hz = s.Double(3);
-    e.samples_total = s.Int(4);
-    e.blocks_total = s.Int(5);
-    e.state = s.Text(6);
-    e.start_utime = s.Int(7);
-    e.end_utime = s.Int(8);
+    SqliteRow(s) >> e.rig_id >> e.experiment_id >> e.signal_spec >> e.sample_rate_hz >>
+        e.samples_total >> e.blocks_total >> e.state >> e.start_utime >> e.end_utime;
     out.push_back(e);
   }
   return out;
@@ -69,19 +62,9 @@ const char* kJobColumns =
     "lease_expires_utime, attempts, created_utime, finished_utime, message";
 JobRecord ReadJob(const SqliteStatement& s) {
   JobRecord j;
-  j.request_id = s.Int(0);
-  j.rig_id = s.Text(1);
-  j.experiment_id = s.Int(2);
-  j.method = s.Text(3);
-  j.options_json = s.Text(4);
-  j.requested_by = s.Text(5);
-  j.state = s.Text(6);
-  j.worker_id = s.Text(7);
-  j.lease_expires_utime = s.Int(8);
-  j.attempts = static_cast<int>(s.Int(9));
-  j.created_utime = s.Int(10);
-  j.finished_utime = s.Int(11);
-  j.message = s.Text(12);
+  SqliteRow(s) >> j.request_id >> j.rig_id >> j.experiment_id >> j.method >> j.options_json >>
+      j.requested_by >> j.state >> j.worker_id >> j.lease_expires_utime >> j.attempts >>
+      j.created_utime >> j.finished_utime >> j.message;
   return j;
 }
 }  // namespace
@@ -208,24 +191,10 @@ const char* kModelSelect =
     "ON e.rig_id = m.rig_id AND e.experiment_id = m.experiment_id ";
 ModelRecord ReadModel(const SqliteStatement& s) {
   ModelRecord m;
-  m.model_id = s.Int(0);
-  m.request_id = s.Int(1);
-  m.rig_id = s.Text(2);
-  m.experiment_id = s.Int(3);
-  m.method = s.Text(4);
-  m.options_json = s.Text(5);
-  m.data_hash = s.Text(6);
-  m.software_version = s.Text(7);
-  m.worker_id = s.Text(8);
-  m.n_samples = s.Int(9);
-  m.sample_time_s = s.Double(10);
-  m.created_utime = s.Int(11);
-  m.compute_s = s.Double(12);
-  m.fit_percent = s.IsNull(13) ? std::nan("") : s.Double(13);
-  m.status = s.Text(14);
-  m.model_json = s.Text(15);
-  m.report_json = s.Text(16);
-  m.signal_spec = s.Text(17);
+  SqliteRow(s) >> m.model_id >> m.request_id >> m.rig_id >> m.experiment_id >> m.method >>
+      m.options_json >> m.data_hash >> m.software_version >> m.worker_id >> m.n_samples >>
+      m.sample_time_s >> m.created_utime >> m.compute_s >> m.fit_percent >> m.status >>
+      m.model_json >> m.report_json >> m.signal_spec;  // fit_percent: NULL reads as NaN
   return m;
 }
 }  // namespace
@@ -316,13 +285,8 @@ constexpr const char* kDiagnosisSelect =
     "report_json FROM diagnosis_reports ";
 DiagnosisRecord ReadDiagnosis(const SqliteStatement& s) {
   DiagnosisRecord d;
-  d.report_id = s.Int(0);
-  d.request_id = s.Int(1);
-  d.rig_id = s.Text(2);
-  d.model_id = s.Int(3);
-  d.experiment_id = s.Int(4);
-  d.created_utime = s.Int(5);
-  d.report_json = s.Text(6);
+  SqliteRow(s) >> d.report_id >> d.request_id >> d.rig_id >> d.model_id >> d.experiment_id >>
+      d.created_utime >> d.report_json;
   return d;
 }
 }  // namespace

@@ -111,16 +111,8 @@ const char* kExperimentSelect =
     "FROM experiments e ";
 StoredExperiment ReadExperiment(const SqliteStatement& s) {
   StoredExperiment e;
-  e.rig_id = s.Text(0);
-  e.experiment_id = s.Int(1);
-  e.signal_spec = s.Text(2);
-  e.sample_rate_hz = s.Double(3);
-  e.ended = s.Int(4) != 0;
-  e.blocks_total = s.Int(5);
-  e.samples_total = s.Int(6);
-  e.updated_utime = s.Int(7);
-  e.blocks_stored = s.Int(8);
-  e.commands_stored = s.Int(9);
+  SqliteRow(s) >> e.rig_id >> e.experiment_id >> e.signal_spec >> e.sample_rate_hz >> e.ended >>
+      e.blocks_total >> e.samples_total >> e.updated_utime >> e.blocks_stored >> e.commands_stored;
   return e;
 }
 }  // namespace
@@ -154,12 +146,7 @@ std::vector<StoredBlock> ExperimentStore::Blocks(const std::string& rig_id, int6
   while (s.Step()) {
     if (skip.count(s.Int(0))) continue;
     StoredBlock b;
-    b.seq = s.Int(0);
-    b.first_sample = s.Int(1);
-    b.n_samples = s.Int(2);
-    b.utime = s.Int(3);
-    b.recv_utime = s.Int(4);
-    b.data = s.Blob(5);
+    SqliteRow(s) >> b.seq >> b.first_sample >> b.n_samples >> b.utime >> b.recv_utime >> b.data;
     out.push_back(std::move(b));
   }
   return out;

@@ -4,6 +4,7 @@
 // std::runtime_error with SQLite's message and the statement.
 #include <sqlite3.h>
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -67,6 +68,44 @@ class SqliteStatement {
   SqliteDatabase& db_;
   sqlite3_stmt* stmt_ = nullptr;
   std::string sql_;
+};
+
+// Reads the current row of a statement column by column, left to right, into typed fields:
+//   SqliteRow(s) >> e.rig_id >> e.experiment_id >> e.sample_rate_hz;
+// A NULL read into a double gives NaN (an absent measure, e.g. fit_percent).
+class SqliteRow {
+ public:
+  explicit SqliteRow(const SqliteStatement& s, int first_column = 0)
+      : s_(s), column_(first_column) {}
+  SqliteRow& operator>>(int64_t& v) {
+    v = s_.Int(column_++);
+    return *this;
+  }
+  SqliteRow& operator>>(int& v) {
+    v = static_cast<int>(s_.Int(column_++));
+    return *this;
+  }
+  SqliteRow& operator>>(bool& v) {
+    v = s_.Int(column_++) != 0;
+    return *this;
+  }
+  SqliteRow& operator>>(double& v) {
+    v = s_.IsNull(column_) ? std::nan("") : s_.Double(column_);
+    ++column_;
+    return *this;
+  }
+  SqliteRow& operator>>(std::string& v) {
+    v = s_.Text(column_++);
+    return *this;
+  }
+  SqliteRow& operator>>(std::vector<uint8_t>& v) {
+    v = s_.Blob(column_++);
+    return *this;
+  }
+
+ private:
+  const SqliteStatement& s_;
+  int column_;
 };
 
 // BEGIN IMMEDIATE … COMMIT, rolled back if destroyed without Commit().

@@ -60,4 +60,42 @@ bool StatusReporter::Maybe(const std::string& state, const std::string& details_
   return true;
 }
 
+ExperimentStatusPublisher::ExperimentStatusPublisher(Transport& transport, std::string channel,
+                                                     double period_s)
+    : transport_(transport), channel_(std::move(channel)), period_s_(period_s) {}
+
+void ExperimentStatusPublisher::Publish(const experiment_status_t& status) {
+  experiment_status_t s = status;
+  s.utime = NowMicros();
+  s.seq = seq_++;
+  transport_.PublishMessage(channel_, s);
+}
+
+void ExperimentStatusPublisher::Finished(const experiment_status_t& status) {
+  Publish(status);
+  recent_.push_back(status);
+  if (recent_.size() > 8) recent_.pop_front();
+}
+
+bool ExperimentStatusPublisher::Due() {
+  const int64_t now = NowMicros();
+  if (now - last_utime_ < static_cast<int64_t>(period_s_ * 1e6)) return false;
+  last_utime_ = now;
+  return true;
+}
+
+nlohmann::json ExperimentStatusPublisher::RecentJson(bool with_counts) const {
+  nlohmann::json recent = nlohmann::json::array();
+  for (const auto& s : recent_) {
+    nlohmann::json j = {
+        {"experiment_id", s.experiment_id}, {"state", s.state}, {"message", s.message}};
+    if (with_counts) {
+      j["samples"] = s.samples_total;
+      j["blocks"] = s.blocks_total;
+    }
+    recent.push_back(j);
+  }
+  return recent;
+}
+
 }  // namespace idrig

@@ -36,7 +36,8 @@ ExciteService::ExciteService(Transport& transport, ExciteConfig config)
       config_(std::move(config)),
       reporter_(transport, "excite", "excite-" + config_.rig_id),
       command_channel_(Channel(config_.rig_id, ChannelKind::kCommand)),
-      status_channel_(Channel(config_.rig_id, ChannelKind::kExperimentStatus)),
+      status_(transport, Channel(config_.rig_id, ChannelKind::kExperimentStatus),
+              config_.status_period_s),
       // Starts at the start time in µs, so seq keeps increasing across restarts (the rig
       // refuses a seq that is not above the last one it accepted).
       command_seq_(NowMicros()),
@@ -130,9 +131,7 @@ void ExciteService::Start(const experiment_request_t& request) {
   auto fail = [&](const std::string& message) {
     status.message = message;
     status.end_utime = NowMicros();
-    PublishStatus(status);
-    recent_.push_back(status);
-    if (recent_.size() > 8) recent_.pop_front();
+    status_.Finished(status);
   };
   if (active_) {
     Reply(request, request_reply_t::STATE_REFUSED,
@@ -189,7 +188,7 @@ void ExciteService::Start(const experiment_request_t& request) {
         "; peak |u| " + std::to_string(accepted.peak_abs);
     a.status = status;
     active_ = std::move(a);
-    PublishStatus(active_->status);
+    status_.Publish(active_->status);
     Reply(request, request_reply_t::STATE_ACCEPTED, status.message);
     spdlog::info("experiment {} started: {} samples at {} Hz, {}", request.experiment_id,
                  status.samples_total, request.sample_rate_hz, status.message);
@@ -202,7 +201,7 @@ void ExciteService::Start(const experiment_request_t& request) {
 void ExciteService::Stop(const experiment_request_t& request) {
   if (!active_ || active_->status.experiment_id != request.experiment_id) {
     bool ended = false;
-    for (const auto& s : recent_) ended |= s.experiment_id == request.experiment_id;
+    for (const auto& s : status_.recent()) ended |= s.experiment_id == request.experiment_id;
     return Reply(request, request_reply_t::STATE_REFUSED,
                  "experiment " + std::to_string(request.experiment_id) +
                      (ended ? " has already ended" : " is not running") + " on rig " +
@@ -236,9 +235,7 @@ void ExciteService::Finish(int32_t state, const std::string& message) {
   active_->status.state = state;
   active_->status.end_utime = NowMicros();
   if (!message.empty()) active_->status.message = message;
-  PublishStatus(active_->status);
-  recent_.push_back(active_->status);
-  if (recent_.size() > 8) recent_.pop_front();
+  status_.Finished(active_->status);
   active_.reset();
 }
 
@@ -268,20 +265,11 @@ void ExciteService::Tick() {
       Finish(experiment_status_t::STATE_DONE, "");
     }
   }
-  const int64_t now = NowMicros();
-  if (now - last_status_us_ >= static_cast<int64_t>(config_.status_period_s * 1e6)) {
-    last_status_us_ = now;
-    if (active_) PublishStatus(active_->status);
-    if (!recent_.empty()) PublishStatus(recent_.back());
+  if (status_.Due()) {
+    if (active_) status_.Publish(active_->status);
+    if (!status_.recent().empty()) status_.Publish(status_.recent().back());
   }
   if (reporter_.Due()) reporter_.Maybe(active_ ? "busy" : "running", Details().dump(), true);
-}
-
-void ExciteService::PublishStatus(const experiment_status_t& status) {
-  experiment_status_t s = status;
-  s.utime = NowMicros();
-  s.seq = status_seq_++;
-  transport_.PublishMessage(status_channel_, s);
 }
 
 nlohmann::json ExciteService::Details() const {
@@ -294,11 +282,7 @@ nlohmann::json ExciteService::Details() const {
                    {"samples_total", active_->status.samples_total},
                    {"signal_spec", active_->status.signal_spec}};
   }
-  nlohmann::json recent = nlohmann::json::array();
-  for (const auto& s : recent_)
-    recent.push_back(
-        {{"experiment_id", s.experiment_id}, {"state", s.state}, {"message", s.message}});
-  d["recent"] = recent;
+  d["recent"] = status_.RecentJson(false);
   return d;
 }
 

@@ -68,21 +68,18 @@ class ExciteService {
   void SendCommand(int64_t experiment_id, int64_t first_sample, double fs, int32_t flags,
                    const std::vector<double>& u);
   void Finish(int32_t state, const std::string& message);
-  void PublishStatus(const experiment_status_t& status);
 
   Transport& transport_;
   ExciteConfig config_;
   StatusReporter reporter_;
-  std::string command_channel_, status_channel_;
+  std::string command_channel_;
+  ExperimentStatusPublisher status_;
   int64_t command_seq_;
-  int64_t status_seq_ = 0;
   std::optional<Active> active_;
-  std::deque<experiment_status_t> recent_;  // finished experiments, newest last
   EnvelopeVerifier verifier_;
   std::optional<EnvelopeSigner> reply_signer_;
   std::map<int64_t, std::pair<int32_t, std::string>> replies_;  // request id -> answer given
   std::string reply_channel_;
-  int64_t last_status_us_ = 0;
 };
 
 }  // namespace idrig

@@ -50,7 +50,8 @@ RigSim::RigSim(Transport& transport, RigSimConfig config)
       journal_(config_.state_dir),
       command_marks_(config_.state_dir.empty() ? "" : config_.state_dir + "/commands.hwm"),
       meas_channel_(Channel(config_.rig_id, ChannelKind::kMeasurement)),
-      status_channel_(Channel(config_.rig_id, ChannelKind::kExperimentStatus)),
+      status_(transport, Channel(config_.rig_id, ChannelKind::kExperimentStatus),
+              config_.status_period_s),
       rng_(config_.seed) {
   if (config_.keys.empty())
     throw std::invalid_argument("idrig-rig-sim needs an HMAC key (key_file)");
@@ -106,16 +107,10 @@ void RigSim::Recover() {
                      std::to_string(samples) + " on missing (not measured)";
     spdlog::warn("experiment {}: {}", e.experiment_id, status.message);
     journal_.End(e.experiment_id, status.message);
-    Remember(status);
-    PublishStatus(status);
+    status_.Finished(status);
   }
   while (static_cast<int>(sent_blocks_.size()) > config_.keep_experiments)
     sent_blocks_.erase(sent_blocks_.begin());
-}
-
-void RigSim::Remember(const experiment_status_t& status) {
-  recent_.push_back(status);
-  if (recent_.size() > 8) recent_.pop_front();
 }
 
 void RigSim::RefuseUnknown(const actuator_command_t& command, const std::string& why) {
@@ -131,8 +126,7 @@ void RigSim::RefuseUnknown(const actuator_command_t& command, const std::string&
   spdlog::warn("{}", last_refusal_);
   ended_ids_[command.experiment_id] = true;
   journal_.End(command.experiment_id, why);
-  Remember(status);
-  PublishStatus(status);
+  status_.Finished(status);
 }
 
 void RigSim::OnReplayRequest(const uint8_t* data, size_t size) {
@@ -268,7 +262,7 @@ void RigSim::StartExperiment(const actuator_command_t& command) {
   journal_.Begin(command.experiment_id);
   spdlog::info("experiment {} started at {} Hz", command.experiment_id, command.sample_rate_hz);
   experiment_ = std::move(e);
-  PublishStatus(experiment_->status);
+  status_.Publish(experiment_->status);
 }
 
 void RigSim::ApplySample(double u) {
@@ -338,8 +332,7 @@ void RigSim::End(int32_t state, const std::string& message) {
   e.status.end_utime = NowMicros();
   e.status.message = message;
   last_u_ = config_.safe_input;  // safe input after every experiment
-  PublishStatus(e.status);
-  Remember(e.status);
+  status_.Finished(e.status);
   journal_.End(e.status.experiment_id, message);
   static const char* names[] = {"pending", "running", "done", "stopped", "failed", "interrupted"};
   spdlog::log(state == experiment_status_t::STATE_DONE ? spdlog::level::info : spdlog::level::warn,
@@ -356,19 +349,11 @@ void RigSim::Tick() {
     End(experiment_status_t::STATE_FAILED, "watchdog: no command for " +
                                                std::to_string(config_.watchdog_s) +
                                                " s; safe input applied");
-  if (now - last_status_us_ >= static_cast<int64_t>(config_.status_period_s * 1e6)) {
-    last_status_us_ = now;
-    if (experiment_) PublishStatus(experiment_->status);
-    for (const auto& s : recent_) PublishStatus(s);  // full snapshot of the recent ones
+  if (status_.Due()) {
+    if (experiment_) status_.Publish(experiment_->status);
+    for (const auto& s : status_.recent()) status_.Publish(s);  // full snapshot of the recent ones
   }
   if (reporter_.Due()) reporter_.Maybe(experiment_ ? "busy" : "running", Details().dump(), true);
-}
-
-void RigSim::PublishStatus(const experiment_status_t& status) {
-  experiment_status_t s = status;
-  s.utime = NowMicros();
-  s.seq = status_seq_++;
-  transport_.PublishMessage(status_channel_, s);
 }
 
 nlohmann::json RigSim::Details() const {
@@ -383,14 +368,7 @@ nlohmann::json RigSim::Details() const {
     d["experiment"] = {{"experiment_id", experiment_->status.experiment_id},
                        {"samples", experiment_->next_sample},
                        {"blocks", experiment_->block_seq}};
-  nlohmann::json recent = nlohmann::json::array();
-  for (const auto& s : recent_)
-    recent.push_back({{"experiment_id", s.experiment_id},
-                      {"state", s.state},
-                      {"samples", s.samples_total},
-                      {"blocks", s.blocks_total},
-                      {"message", s.message}});
-  d["recent"] = recent;
+  d["recent"] = status_.RecentJson(true);
   return d;
 }
 

@@ -84,10 +84,8 @@ class RigSim {
   void ApplySample(double u);
   void FlushBlock();
   void End(int32_t state, const std::string& message);
-  void PublishStatus(const experiment_status_t& status);
   void Recover();
   void RefuseUnknown(const actuator_command_t& command, const std::string& why);
-  void Remember(const experiment_status_t& status);
 
   Transport& transport_;
   RigSimConfig config_;
@@ -95,17 +93,16 @@ class RigSim {
   RigJournal journal_;  // before command_marks_: it creates the state directory
   ReplayStore command_marks_;
   CommandVerifier verifier_;
-  std::string meas_channel_, status_channel_;
+  std::string meas_channel_;
+  ExperimentStatusPublisher status_;
   std::mt19937_64 rng_;
   std::normal_distribution<double> noise_{0.0, 1.0};
   std::optional<Experiment> experiment_;
-  std::deque<experiment_status_t> recent_;
   std::map<int64_t, bool> ended_ids_;
   // Encoded blocks of the recent experiments, re-sent when the logger reports a loss.
   std::map<int64_t, std::vector<std::vector<uint8_t>>> sent_blocks_;
   int64_t resent_blocks_ = 0;
   double last_u_ = 0.0;
-  int64_t status_seq_ = 0, last_status_us_ = 0;
   std::string last_refusal_;
 };
 
