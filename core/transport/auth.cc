@@ -37,7 +37,7 @@ ReplayStore::ReplayStore(std::string path, double window_s)
     : path_(std::move(path)), window_s_(window_s) {
   if (path_.empty()) return;
   const size_t slash = path_.find_last_of('/');
-  if (slash != std::string::npos && slash > 0) mkdir(path_.substr(0, slash).c_str(), 0700);
+  if (slash != std::string::npos && slash > 0) MakeDirectories(path_.substr(0, slash));
   Load();
   Compact();
 }

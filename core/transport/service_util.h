@@ -17,6 +17,10 @@ std::unique_ptr<Transport> MakeServiceTransport(const std::string& url, double r
 // loses nothing. Throws std::invalid_argument naming the file when it cannot be opened.
 void SetUpServiceLog(const std::string& service, const std::string& log_file);
 
+// mkdir -p with mode 0700 for the directories it creates (state directories). Errors are left
+// to the first use of the directory.
+void MakeDirectories(const std::string& path);
+
 // Installs SIGINT/SIGTERM handlers that set a flag read by StopRequested().
 void InstallStopSignals();
 bool StopRequested();

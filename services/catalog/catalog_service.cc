@@ -31,6 +31,7 @@ CatalogService::CatalogService(Transport& transport, CatalogConfig config)
       config_(std::move(config)),
       catalog_(config_.db_path),
       reporter_(transport, "catalog", "catalog-" + HostName()),
+      start_utime_(NowMicros()),
       verifier_(config_.keys,
                 config_.state_dir.empty() ? "" : config_.state_dir + "/catalog-senders.hwm",
                 config_.auth_window_s, "idrig-catalog") {
@@ -120,6 +121,12 @@ void CatalogService::OnIdentifyRequest(const std::string& channel, const uint8_t
   if (auto existing = catalog_.Job(request.request_id)) return ReplyWithJobState(*existing);
   const std::string options = request.options_json.empty() ? "{}" : request.options_json;
   const std::string why = Refusal(request.rig_id, request.experiment_id, request.method, options);
+  if (!why.empty() && why.find("unknown to the catalogue") != std::string::npos &&
+      NowMicros() - start_utime_ < 3000000) {
+    // Just started: the rigs' periodic status of their recent experiments may not have arrived
+    // yet. No answer: the command line re-sends, and is answered once we know.
+    return;
+  }
   if (!why.empty()) {
     ++refused_requests_;
     spdlog::warn("identify request {} from {} refused: {}", request.request_id, who.id, why);

@@ -56,6 +56,7 @@ class CatalogService {
   CatalogConfig config_;
   Catalog catalog_;
   StatusReporter reporter_;
+  int64_t start_utime_;
   EnvelopeVerifier verifier_;
   std::optional<EnvelopeSigner> service_signer_, operator_signer_;
   int64_t refused_requests_ = 0, refused_results_ = 0;

@@ -1,5 +1,7 @@
 #include "services/rig_sim/rig_journal.h"
 
+#include "core/transport/service_util.h"
+
 #include <dirent.h>
 #include <fcntl.h>
 #include <spdlog/spdlog.h>
@@ -15,7 +17,7 @@ namespace idrig {
 
 RigJournal::RigJournal(std::string dir) : dir_(std::move(dir)) {
   if (dir_.empty()) return;
-  mkdir(dir_.c_str(), 0700);
+  MakeDirectories(dir_);
   struct stat info {};
   if (stat(dir_.c_str(), &info) != 0 || !S_ISDIR(info.st_mode))
     throw std::invalid_argument("rig state_dir '" + dir_ + "' is not a directory");

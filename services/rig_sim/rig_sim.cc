@@ -332,8 +332,8 @@ void RigSim::End(int32_t state, const std::string& message) {
   e.status.end_utime = NowMicros();
   e.status.message = message;
   last_u_ = config_.safe_input;  // safe input after every experiment
+  journal_.End(e.status.experiment_id, message);  // on disk before it is announced
   status_.Finished(e.status);
-  journal_.End(e.status.experiment_id, message);
   static const char* names[] = {"pending", "running", "done", "stopped", "failed", "interrupted"};
   spdlog::log(state == experiment_status_t::STATE_DONE ? spdlog::level::info : spdlog::level::warn,
               "experiment {} ended {}: {} samples, {} blocks; {}", e.status.experiment_id,

@@ -86,6 +86,7 @@ std::string RecordHash(const IoRecord& record) {
 namespace {
 std::string DefaultWorkerId() { return "worker-" + HostName() + "-" + std::to_string(getpid()); }
 int64_t Us(double seconds) { return static_cast<int64_t>(seconds * 1e6); }
+constexpr double kUnansweredClaimS = 3.0;
 
 // Runs in the compute thread: no transport access here.
 model_result_t Compute(identify_request_t request, IoRecord record, std::string worker_id,
@@ -436,7 +437,13 @@ void WorkerService::Tick() {
     // One claim at a time, oldest offer first; re-sent until the catalogue answers.
     auto offer = offers_.begin();
     if (claiming_ != 0 && offers_.count(claiming_)) offer = offers_.find(claiming_);
-    if (claiming_ != offer->first || now - last_claim_us_ >= Us(config_.claim_retry_s)) {
+    if (claiming_ == offer->first && now - claim_start_us_ > Us(kUnansweredClaimS)) {
+      // The catalogue does not know the job (it refused the request, or has not heard it):
+      // drop the offer; the catalogue offers the job again if it accepts it later.
+      offers_.erase(offer);
+      claiming_ = 0;
+    } else if (claiming_ != offer->first || now - last_claim_us_ >= Us(config_.claim_retry_s)) {
+      if (claiming_ != offer->first) claim_start_us_ = now;
       claiming_ = offer->first;
       last_claim_us_ = now;
       SendClaim(offer->second);

@@ -98,7 +98,7 @@ class WorkerService {
   std::optional<EnvelopeSigner> signer_;
   std::map<int64_t, identify_request_t> offers_;
   std::set<int64_t> finished_;
-  int64_t claiming_ = 0, last_claim_us_ = 0;
+  int64_t claiming_ = 0, last_claim_us_ = 0, claim_start_us_ = 0;
   std::optional<Job> job_;
   int64_t claim_seq_ = 0, replay_counter_ = 0, jobs_done_ = 0, replayed_blocks_ = 0;
   std::string last_message_;
