@@ -27,4 +27,6 @@ printf "%064d\n" 0 > "$dir/zero.key"; chmod 600 "$dir/zero.key"
 expect 2 "repeats a 1-byte pattern" -- "$idrig" experiment stop --rig sim1 --experiment 1 --key-file "$dir/zero.key"
 head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' > "$dir/open.key"; chmod 644 "$dir/open.key"
 expect 2 "chmod 600 $dir/open.key" -- "$idrig" experiment stop --rig sim1 --experiment 1 --key-file "$dir/open.key"
+# lcm-spy without a display and without xvfb-run: a sentence, not a Java stack trace.
+expect 1 "idrig spy needs a display" -- env -u DISPLAY PATH=/nonexistent "$idrig" spy
 echo "service commands reject bad input: ok"
