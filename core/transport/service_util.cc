@@ -24,6 +24,8 @@ std::unique_ptr<Transport> MakeServiceTransport(const std::string& url, double r
 void SetUpServiceLog(const std::string& service, const std::string& log_file) {
   std::vector<spdlog::sink_ptr> sinks{std::make_shared<spdlog::sinks::stderr_sink_mt>()};
   if (!log_file.empty()) {
+    const size_t slash = log_file.find_last_of('/');
+    if (slash != std::string::npos && slash > 0) MakeDirectories(log_file.substr(0, slash));
     try {
       sinks.push_back(std::make_shared<spdlog::sinks::basic_file_sink_mt>(log_file, false));
     } catch (const std::exception& e) {

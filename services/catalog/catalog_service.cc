@@ -69,8 +69,8 @@ std::string CatalogService::Refusal(const std::string& rig_id, int64_t experimen
     if (e.experiment_id != experiment_id) continue;
     if (e.state == "interrupted" && options.value("segment", "") != "longest_complete")
       return "experiment " + std::to_string(experiment_id) + " of rig " + rig_id +
-             " was interrupted (samples 0.." + std::to_string(e.samples_total - 1) +
-             " only): add \"segment\": \"longest_complete\" to the options to identify from them";
+             " was interrupted (samples 0.." + std::to_string(e.samples_total - 1) + " of " +
+             std::to_string(e.samples_planned) + " planned measured; " + e.message + "): add \"segment\": \"longest_complete\" to the options to identify from them";
     if (e.state == "failed" || e.state == "stopped")
       if (options.value("segment", "") != "longest_complete")
         return "experiment " + std::to_string(experiment_id) + " of rig " + rig_id + " " + e.state +
@@ -283,10 +283,12 @@ void CatalogService::OnExperimentStatus(const std::string&, const uint8_t* data,
   if (status.source == "excite") {
     e.signal_spec = status.signal_spec;
     e.sample_rate_hz = status.sample_rate_hz;
+    e.samples_planned = status.samples_total;
     if (status.state == experiment_status_t::STATE_DONE) e.state = "running";  // the rig decides
   } else {
     e.samples_total = status.samples_total;
     e.blocks_total = status.blocks_total;
+    if (status.state != experiment_status_t::STATE_RUNNING) e.message = status.message;
   }
   // Status is re-sent periodically: write only what changed.
   const std::string key = e.rig_id + "/" + std::to_string(e.experiment_id) + "/" + status.source;

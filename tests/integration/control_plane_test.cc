@@ -339,6 +339,12 @@ TEST(ControlPlane, RigKilledMidExperimentEndsItInterruptedAndNothingSplicedIsSto
         return false;
       },
       5.0));
+  for (const auto& e : reader.Experiments(kRig)) {
+    if (e.experiment_id != 40) continue;
+    EXPECT_EQ(e.samples_planned, 255);  // the catalogue names what is missing: samples_total..254
+    EXPECT_EQ(e.samples_total, rig.samples_total);
+    EXPECT_NE(e.message.find("missing (not measured)"), std::string::npos) << e.message;
+  }
   // A model from the interrupted record: refused unless asked for what was measured.
   const CliResult refused = d.Cli({"models", "request", "--rig", kRig, "--experiment", "40",
                                    "--method", "arx", "--key-file", d.keys.operator_key});
