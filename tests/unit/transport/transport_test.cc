@@ -101,6 +101,28 @@ TEST(Signing, KeyFileErrorsNameTheFile) {
   }
 }
 
+// Regression (tests/fuzz/fuzz_messages, crash-b54a5555…): a message with the right
+// fingerprint whose string length field is 0 made lcm-gen's decoder throw std::length_error
+// out of Decode<T>; now it is counted as undecodable. The input: a measurement block's
+// encoding with actuator_command_t's fingerprint, so utime/seq/key_id read the block's header
+// and rig_id's length field reads zeros.
+TEST(Transport, DecodeCountsAThrowingDecoderAsUndecodable) {
+  measurement_block_t block{};
+  block.rig_id = "sim1";
+  block.experiment_id = 1;
+  std::vector<uint8_t> bytes(block.getEncodedSize());
+  block.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  const uint64_t hash = static_cast<uint64_t>(actuator_command_t::getHash());
+  for (int i = 0; i < 8; ++i) bytes[i] = static_cast<uint8_t>(hash >> (56 - 8 * i));
+  bytes.resize(64, 0);
+  // rig_id's length sits after utime (8), seq (8), key_id (4): bytes 28..31 of the encoding.
+  for (int i = 28; i < 32; ++i) bytes[i] = 0;
+  actuator_command_t command;
+  TransportCounters counters;
+  EXPECT_NO_THROW(EXPECT_FALSE(Decode(bytes.data(), bytes.size(), &command, &counters)));
+  EXPECT_EQ(counters.undecodable, 1);
+}
+
 TEST(Transport, MemqDeliversAndCountsBadMessages) {
   auto transport = MakeLcmTransport("memq://");
   int good = 0;
