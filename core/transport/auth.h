@@ -132,7 +132,6 @@ class EnvelopeVerifier {
   std::string service_;
   std::map<std::string, int64_t> refused_;
   std::string last_refusal_;
-  int64_t refusals_logged_ = 0;
 };
 
 // The sender id of this process for the command line: "cli:<user>@<host>".

@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "core/transport/plausible.h"
+
 namespace idrig {
 
 // Wall clock [µs since the epoch], the utime of every message.
@@ -76,6 +78,10 @@ bool Decode(const uint8_t* data, size_t size, T* out, TransportCounters* counter
   for (int i = 0; i < 8; ++i) found = (found << 8) | data[i];
   if (found != expected) {
     if (counters) ++counters->foreign;
+    return false;
+  }
+  if (!PlausibleArrays<T>(data, size)) {  // a count the message cannot hold (plausible.h)
+    if (counters) ++counters->undecodable;
     return false;
   }
   // lcm-gen's decoders throw (std::length_error) on a string whose length field is 0 or

@@ -13,8 +13,8 @@ flags="-O1 -g -fno-omit-frame-pointer -fsanitize=fuzzer-no-link,address,undefine
 cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIDRIG_FUZZ=ON \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
-cmake --build build-fuzz -j2 --target "${targets[@]}"
 for t in "${targets[@]}"; do
+  cmake --build build-fuzz -j2 --target "$t" >/dev/null
   mkdir -p "build-fuzz/corpus/$t"
   start=$(date +%s.%N)
   (cd build-fuzz && "bin/$t" -runs="$runs" -max_len=4096 -timeout=10 -rss_limit_mb=2048 \

@@ -6,6 +6,9 @@
 
 #include <idrig/actuator_command_t.hpp>
 #include <idrig/measurement_block_t.hpp>
+#include <idrig/replay_done_t.hpp>
+#include <idrig/replay_request_t.hpp>
+#include <idrig/signed_message_t.hpp>
 
 #include "core/transport/channels.h"
 #include "core/transport/signing.h"
@@ -121,6 +124,69 @@ TEST(Transport, DecodeCountsAThrowingDecoderAsUndecodable) {
   TransportCounters counters;
   EXPECT_NO_THROW(EXPECT_FALSE(Decode(bytes.data(), bytes.size(), &command, &counters)));
   EXPECT_EQ(counters.undecodable, 1);
+}
+
+template <class T>
+std::vector<uint8_t> Encode(const T& m) {
+  std::vector<uint8_t> bytes(m.getEncodedSize());
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+// Regression (fuzz_messages, crash-bfd91f86…): a short message claiming a huge array count made
+// the decoder allocate gigabytes before noticing the bytes were not there. Real encodings of
+// every type with arrays pass the plausibility walk; a claimed count of 2·10⁹ does not.
+TEST(Transport, ArrayCountsAMessageCannotHoldAreRefusedBeforeAllocating) {
+  measurement_block_t block{};
+  block.rig_id = "rig-a";
+  block.n_samples = 3;
+  block.n_inputs = 2;
+  block.n_outputs = 1;
+  block.u.assign(3, {1.0, 2.0});
+  block.y.assign(3, {3.0});
+  actuator_command_t command = Command(1);
+  signed_message_t envelope{};
+  envelope.sender = "s";
+  envelope.key_role = "operator";
+  envelope.payload_type = "x";
+  envelope.payload_size = 5;
+  envelope.payload.assign(5, 7);
+  replay_request_t request{};
+  request.requester = "w";
+  request.rig_id = "rig-a";
+  request.n_have = 2;
+  request.have_seqs = {1, 2};
+  replay_done_t done{};
+  done.requester = "w";
+  done.rig_id = "rig-a";
+  done.n_missing = 1;
+  done.missing_seqs = {4};
+  TransportCounters counters;
+  auto round_trip = [&](auto message) {
+    const auto bytes = Encode(message);
+    decltype(message) out;
+    return Decode(bytes.data(), bytes.size(), &out, &counters);
+  };
+  EXPECT_TRUE(round_trip(block));
+  EXPECT_TRUE(round_trip(command));
+  EXPECT_TRUE(round_trip(envelope));
+  EXPECT_TRUE(round_trip(request));
+  EXPECT_TRUE(round_trip(done));
+  EXPECT_EQ(counters.undecodable, 0);
+  // The command with n_samples = 2·10⁹ and its 3 samples: 16 GB claimed in a 100-byte message.
+  std::vector<uint8_t> bytes = Encode(command);
+  const size_t n_samples_at = bytes.size() - 32 - 3 * 8 - 4;
+  const uint32_t huge = 2000000000u;
+  for (int i = 0; i < 4; ++i) bytes[n_samples_at + i] = static_cast<uint8_t>(huge >> (24 - 8 * i));
+  actuator_command_t out;
+  EXPECT_FALSE(Decode(bytes.data(), bytes.size(), &out, &counters));
+  EXPECT_EQ(counters.undecodable, 1);
+  std::vector<uint8_t> block_bytes = Encode(block);
+  const size_t counts_at = block_bytes.size() - 9 * 8 - 12;
+  for (int i = 0; i < 4; ++i) block_bytes[counts_at + i] = static_cast<uint8_t>(huge >> (24 - 8 * i));
+  measurement_block_t block_out;
+  EXPECT_FALSE(Decode(block_bytes.data(), block_bytes.size(), &block_out, &counters));
+  EXPECT_EQ(counters.undecodable, 2);
 }
 
 TEST(Transport, MemqDeliversAndCountsBadMessages) {
