@@ -3,13 +3,22 @@
 // the bytes are there: a 60-byte message claiming n_samples = 2·10⁹ makes a receiver allocate
 // 16 GB (found by tests/fuzz/fuzz_messages). PlausibleArrays<T>() walks the encoding of the
 // types with variable-length arrays (LCM: big-endian, a string is an int32 length including the
-// NUL, then the bytes) and refuses a count whose elements could not fit in the message.
+// NUL, then the bytes) and refuses a count whose elements could not fit in the message, and a
+// string length below 1 or beyond the message (every idrig type is listed).
 #include <cstddef>
 #include <cstdint>
 #include <idrig/actuator_command_t.hpp>
+#include <idrig/experiment_request_t.hpp>
+#include <idrig/experiment_status_t.hpp>
+#include <idrig/identify_claim_t.hpp>
+#include <idrig/identify_request_t.hpp>
 #include <idrig/measurement_block_t.hpp>
+#include <idrig/model_result_t.hpp>
 #include <idrig/replay_done_t.hpp>
 #include <idrig/replay_request_t.hpp>
+#include <idrig/request_reply_t.hpp>
+#include <idrig/result_ack_t.hpp>
+#include <idrig/service_status_t.hpp>
 #include <idrig/signed_message_t.hpp>
 #include <vector>
 
@@ -39,7 +48,9 @@ inline bool PlausibleEncoding(const uint8_t* data, size_t size, const char* spec
         if (pos + 4 > size) return false;
         const int32_t n = int32_at(pos);
         pos += 4;
-        if (n < 0 || static_cast<size_t>(n) > size - pos) return false;
+        // A string's length counts its NUL (>= 1); lcm-gen computes length - 1 in int and
+        // reads that many bytes (INT_MIN - 1 overflows to a 2 GB read: fuzz_messages, UBSan).
+        if (n < (*c == 's' ? 1 : 0) || static_cast<size_t>(n) > size - pos) return false;
         if (*c == 'n') {
           counts.push_back(n);
           continue;
@@ -70,8 +81,23 @@ inline bool PlausibleEncoding(const uint8_t* data, size_t size, const char* spec
 
 template <class T>
 bool PlausibleArrays(const uint8_t*, size_t) {
-  return true;  // no variable-length array: lcm-gen checks string lengths itself
+  return true;  // a type not listed here (tests' own types)
 }
+#define IDRIG_PLAUSIBLE(type, spec)                                       \
+  template <>                                                             \
+  inline bool PlausibleArrays<type>(const uint8_t* d, size_t n) {         \
+    return PlausibleEncoding(d, n, spec);                                 \
+  }
+// The string-only types: every string length must fit (fields in .lcm order).
+IDRIG_PLAUSIBLE(experiment_request_t, "qqsqisqqqqqs")
+IDRIG_PLAUSIBLE(experiment_status_t, "qqssqqisqqqqqqs")
+IDRIG_PLAUSIBLE(identify_claim_t, "qqqsisiq")
+IDRIG_PLAUSIBLE(identify_request_t, "qqsqsss")
+IDRIG_PLAUSIBLE(model_result_t, "qqsqsibsssqqsqqss")
+IDRIG_PLAUSIBLE(result_ack_t, "qqsqbs")
+IDRIG_PLAUSIBLE(request_reply_t, "qqsqsiqs")
+IDRIG_PLAUSIBLE(service_status_t, "qqsssisqqqqqqqqqqqqs")
+#undef IDRIG_PLAUSIBLE
 template <>
 inline bool PlausibleArrays<actuator_command_t>(const uint8_t* d, size_t n) {
   return PlausibleEncoding(d, n, "qqisqqqin8");

@@ -6,7 +6,15 @@
 
 #include <idrig/actuator_command_t.hpp>
 #include <idrig/measurement_block_t.hpp>
+#include <idrig/experiment_request_t.hpp>
+#include <idrig/experiment_status_t.hpp>
+#include <idrig/identify_claim_t.hpp>
+#include <idrig/identify_request_t.hpp>
+#include <idrig/model_result_t.hpp>
 #include <idrig/replay_done_t.hpp>
+#include <idrig/request_reply_t.hpp>
+#include <idrig/result_ack_t.hpp>
+#include <idrig/service_status_t.hpp>
 #include <idrig/replay_request_t.hpp>
 #include <idrig/signed_message_t.hpp>
 
@@ -187,6 +195,30 @@ TEST(Transport, ArrayCountsAMessageCannotHoldAreRefusedBeforeAllocating) {
   measurement_block_t block_out;
   EXPECT_FALSE(Decode(block_bytes.data(), block_bytes.size(), &block_out, &counters));
   EXPECT_EQ(counters.undecodable, 2);
+  // Every string-only type: a real encoding passes; a string length of INT_MIN does not (lcm-gen
+  // would compute INT_MIN - 1 and read 2 GB: fuzz_messages, crash-9112085f…).
+  experiment_status_t status{};
+  status.source = "rig";
+  status.rig_id = "rig-a";
+  service_status_t service{};
+  service.service = "excite";
+  model_result_t result{};
+  result.rig_id = "rig-a";
+  result.report_json = "{}";
+  EXPECT_TRUE(round_trip(experiment_request_t{}));
+  EXPECT_TRUE(round_trip(status));
+  EXPECT_TRUE(round_trip(identify_claim_t{}));
+  EXPECT_TRUE(round_trip(identify_request_t{}));
+  EXPECT_TRUE(round_trip(result));
+  EXPECT_TRUE(round_trip(result_ack_t{}));
+  EXPECT_TRUE(round_trip(request_reply_t{}));
+  EXPECT_TRUE(round_trip(service));
+  EXPECT_EQ(counters.undecodable, 2);
+  std::vector<uint8_t> result_bytes = Encode(result);
+  for (int i = 0; i < 4; ++i) result_bytes[24 + i] = i == 0 ? 0x80 : 0;  // rig_id's length
+  model_result_t result_out;
+  EXPECT_FALSE(Decode(result_bytes.data(), result_bytes.size(), &result_out, &counters));
+  EXPECT_EQ(counters.undecodable, 3);
 }
 
 TEST(Transport, MemqDeliversAndCountsBadMessages) {
