@@ -55,23 +55,36 @@ run() {
   mkdir -p "$dir/logs"
   : > "$dir/pids"
   "$bin/idrig" example --model-out "$dir/plant.json" --out "$dir/example.csv" --samples 10 2>/dev/null
-  [ -f "$dir/hmac.key" ] || head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' > "$dir/hmac.key"
-  chmod 600 "$dir/hmac.key"
+  # The three deployment keys (docs/services.md, "Authentication"): commands (h1 only),
+  # operator (the CLI on h2, excite, catalogue, workers), services (catalogue, workers).
+  (umask 077
+   for k in hmac operator service; do
+     [ -f "$dir/$k.key" ] || head -c 32 /dev/urandom | od -v -An -tx1 | tr -d ' \n' > "$dir/$k.key"
+   done)
+  chmod 600 "$dir"/*.key
+  local keys="\"operator_key_file\": \"$dir/operator.key\", \"service_key_file\": \"$dir/service.key\""
   cat > "$dir/rig.json" <<JSON
 {"rig_id": "sim1", "model_file": "$dir/plant.json", "noise_std": 0.005, "key_file": "$dir/hmac.key",
- "max_abs": 5, "watchdog_s": 3, "block_samples": 50}
+ "max_abs": 5, "watchdog_s": 3, "block_samples": 50, "state_dir": "$dir/state-h1/rig"}
 JSON
   cat > "$dir/excite.json" <<JSON
-{"rig_id": "sim1", "key_file": "$dir/hmac.key", "block_samples": 20, "max_abs": 5}
+{"rig_id": "sim1", "key_file": "$dir/hmac.key", "block_samples": 20, "max_abs": 5,
+ "operator_key_file": "$dir/operator.key", "state_dir": "$dir/state-h1"}
+JSON
+  cat > "$dir/catalog.json" <<JSON
+{"db_path": "$dir/catalog.db", $keys, "state_dir": "$dir/state-h2"}
+JSON
+  cat > "$dir/worker.json" <<JSON
+{$keys, "state_dir": "$dir/state-h3"}
 JSON
   start h1 rig-sim "$bin/idrig-rig-sim" --config "$dir/rig.json"
   start h1 excite "$bin/idrig-excite" --config "$dir/excite.json"
   start h2 logger "$bin/idrig-logger" --db "$dir/experiments.db"
-  start h2 catalog "$bin/idrig-catalog" --db "$dir/catalog.db"
-  start h3 worker-1 "$bin/idrig-worker" --id h3-worker-1
-  start h3 worker-2 "$bin/idrig-worker" --id h3-worker-2
+  start h2 catalog "$bin/idrig-catalog" --config "$dir/catalog.json"
+  start h3 worker-1 "$bin/idrig-worker" --config "$dir/worker.json" --id h3-worker-1
+  start h3 worker-2 "$bin/idrig-worker" --config "$dir/worker.json" --id h3-worker-2
   sleep 1.5
-  local cli=(ip netns exec "$name-h2" "$bin/idrig")
+  local cli=(ip netns exec "$name-h2" env "IDRIG_KEY_FILE=$dir/operator.key" "$bin/idrig")
   exp=$("${cli[@]}" experiment start --url "$URL" --rig sim1 --signal "prbs:bits=9,amp=1" --fs 10 \
         --duration 51.1 --speed 20 --wait)
   echo "experiment $exp done"

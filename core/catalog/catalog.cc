@@ -23,8 +23,8 @@ void Catalog::UpsertExperiment(const ExperimentRecord& e) {
   SqliteStatement s(
       db_,
       "INSERT INTO experiments(rig_id, experiment_id, signal_spec, sample_rate_hz, "
-      "samples_total, blocks_total, state, start_utime, end_utime) "
-      "VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9) "
+      "samples_total, blocks_total, state, start_utime, end_utime, message, samples_planned) "
+      "VALUES(?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11) "
       "ON CONFLICT(rig_id, experiment_id) DO UPDATE SET "
       "signal_spec = CASE WHEN excluded.signal_spec <> '' THEN excluded.signal_spec ELSE "
       "signal_spec END, "
@@ -34,23 +34,27 @@ void Catalog::UpsertExperiment(const ExperimentRecord& e) {
       "blocks_total = max(blocks_total, excluded.blocks_total), "
       "state = excluded.state, "
       "start_utime = CASE WHEN start_utime = 0 THEN excluded.start_utime ELSE start_utime END, "
-      "end_utime = max(end_utime, excluded.end_utime)");
+      "end_utime = max(end_utime, excluded.end_utime), "
+      "message = CASE WHEN excluded.message <> '' THEN excluded.message ELSE message END, "
+      "samples_planned = max(samples_planned, excluded.samples_planned)");
   s.Bind(1, e.rig_id).Bind(2, e.experiment_id).Bind(3, e.signal_spec).Bind(4, e.sample_rate_hz);
   s.Bind(5, e.samples_total).Bind(6, e.blocks_total).Bind(7, e.state).Bind(8, e.start_utime);
-  s.Bind(9, e.end_utime).Run();
+  s.Bind(9, e.end_utime).Bind(10, e.message).Bind(11, e.samples_planned).Run();
 }
 
 std::vector<ExperimentRecord> Catalog::Experiments(const std::string& rig_id) {
   SqliteStatement s(db_,
                     "SELECT rig_id, experiment_id, signal_spec, sample_rate_hz, samples_total, "
-                    "blocks_total, state, start_utime, end_utime FROM experiments "
+                    "blocks_total, state, start_utime, end_utime, message, samples_planned "
+                    "FROM experiments "
                     "WHERE ?1 = '' OR rig_id = ?1 ORDER BY start_utime, experiment_id");
   s.Bind(1, rig_id);
   std::vector<ExperimentRecord> out;
   while (s.Step()) {
     ExperimentRecord e;
     SqliteRow(s) >> e.rig_id >> e.experiment_id >> e.signal_spec >> e.sample_rate_hz >>
-        e.samples_total >> e.blocks_total >> e.state >> e.start_utime >> e.end_utime;
+        e.samples_total >> e.blocks_total >> e.state >> e.start_utime >> e.end_utime >>
+        e.message >> e.samples_planned;
     out.push_back(e);
   }
   return out;

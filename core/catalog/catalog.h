@@ -22,8 +22,10 @@ struct ExperimentRecord {
   double sample_rate_hz = 0.0;
   int64_t samples_total = 0;
   int64_t blocks_total = 0;
-  std::string state;  // running, done, stopped, failed
+  std::string state;  // running, done, stopped, failed, interrupted
   int64_t start_utime = 0, end_utime = 0;
+  std::string message;          // the rig's final word (interrupted: the samples missing)
+  int64_t samples_planned = 0;  // from the excitation service
 };
 
 struct JobRecord {

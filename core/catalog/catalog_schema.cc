@@ -75,6 +75,10 @@ CREATE TABLE diagnosis_reports(
 )sql",
       // 2: offering jobs scans by state.
       "CREATE INDEX jobs_by_state ON jobs(state, lease_expires_utime);",
+      // 3: why an experiment ended as it did (an interrupted one names its missing samples),
+      // and how many samples were planned (excite's samples_total).
+      "ALTER TABLE experiments ADD COLUMN message TEXT NOT NULL DEFAULT '';"
+      "ALTER TABLE experiments ADD COLUMN samples_planned INTEGER NOT NULL DEFAULT 0;",
   };
   return migrations;
 }

@@ -168,6 +168,23 @@ std::set<int64_t> ExperimentStore::BlockSeqs(const std::string& rig_id, int64_t 
   return out;
 }
 
+std::vector<std::pair<int64_t, int64_t>> ExperimentStore::SamplesWithoutCommand(
+    const std::string& rig_id, int64_t experiment_id, int64_t samples_total) {
+  SqliteStatement s(db_,
+                    "SELECT first_sample, n_samples FROM commands WHERE rig_id = ?1 AND "
+                    "experiment_id = ?2 AND n_samples > 0 ORDER BY first_sample");
+  s.Bind(1, rig_id).Bind(2, experiment_id);
+  std::vector<std::pair<int64_t, int64_t>> gaps;
+  int64_t covered = 0;  // samples 0 .. covered-1 have a command
+  while (s.Step()) {
+    const int64_t first = s.Int(0), n = s.Int(1);
+    if (first > covered) gaps.push_back({covered, std::min(first, samples_total) - 1});
+    covered = std::max(covered, first + n);
+  }
+  if (covered < samples_total) gaps.push_back({covered, samples_total - 1});
+  return gaps;
+}
+
 std::vector<int64_t> ExperimentStore::MissingBlocks(const std::string& rig_id,
                                                     int64_t experiment_id) {
   const std::set<int64_t> have = BlockSeqs(rig_id, experiment_id);

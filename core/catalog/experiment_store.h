@@ -49,6 +49,11 @@ class ExperimentStore {
   // Block seqs in [0, blocks_total) not stored (blocks_total from the rig's final status, or
   // max seq + 1 while the experiment runs).
   std::vector<int64_t> MissingBlocks(const std::string& rig_id, int64_t experiment_id);
+  // Sample ranges [first, last] in [0, samples_total) that no stored actuator command covers
+  // (commands the logger did not hear: it names them instead of calling the record complete).
+  std::vector<std::pair<int64_t, int64_t>> SamplesWithoutCommand(const std::string& rig_id,
+                                                                 int64_t experiment_id,
+                                                                 int64_t samples_total);
 
  private:
   SqliteDatabase db_;

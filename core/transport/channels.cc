@@ -30,6 +30,8 @@ const char* Suffix(ChannelKind kind) {
       return "REPLAY_DONE";
     case ChannelKind::kRigReplayRequest:
       return "RIG_REPLAY_REQ";
+    case ChannelKind::kRequestReply:
+      return "REQ_REPLY";
   }
   return "?";
 }

@@ -13,6 +13,9 @@
 //   IDRIG/<rig>/REPLAY_DONE replay_done_t          logger -> worker
 //   IDRIG/<rig>/RIG_REPLAY_REQ replay_request_t    logger -> rig (blocks it lost; the rig
 //                                                  re-publishes them on MEAS)
+//   IDRIG/<rig>/REQ_REPLY   request_reply_t        excite, catalog -> CLI (accepted, refused, done)
+//   EXP_REQ, IDENT_REQ, CLAIM, RESULT, ACK and REQ_REPLY carry signed_message_t envelopes
+//   (core/transport/auth.h) around the types named above.
 //   IDRIG/STATUS/<service>  service_status_t       every service, ~1 Hz
 // LCM limits channel names to 63 characters: rig ids are 1..24 of [A-Za-z0-9_-].
 #include <string>
@@ -31,7 +34,8 @@ enum class ChannelKind {
   kReplayRequest,
   kReplay,
   kReplayDone,
-  kRigReplayRequest
+  kRigReplayRequest,
+  kRequestReply
 };
 
 // Throws std::invalid_argument naming the rule when the rig id is not usable in a channel.

@@ -1,5 +1,9 @@
 #include "core/transport/service_util.h"
 
+#include <spdlog/sinks/basic_file_sink.h>
+#include <spdlog/sinks/stdout_sinks.h>
+#include <spdlog/spdlog.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -15,6 +19,30 @@ std::unique_ptr<Transport> MakeServiceTransport(const std::string& url, double r
   auto transport = MakeLcmTransport(url);
   if (receive_loss <= 0) return transport;
   return MakeLossyTransport(std::move(transport), receive_loss, static_cast<uint64_t>(getpid()));
+}
+
+void SetUpServiceLog(const std::string& service, const std::string& log_file) {
+  std::vector<spdlog::sink_ptr> sinks{std::make_shared<spdlog::sinks::stderr_sink_mt>()};
+  if (!log_file.empty()) {
+    const size_t slash = log_file.find_last_of('/');
+    if (slash != std::string::npos && slash > 0) MakeDirectories(log_file.substr(0, slash));
+    try {
+      sinks.push_back(std::make_shared<spdlog::sinks::basic_file_sink_mt>(log_file, false));
+    } catch (const std::exception& e) {
+      throw std::invalid_argument("cannot open log file '" + log_file + "': " + e.what());
+    }
+  }
+  auto logger = std::make_shared<spdlog::logger>(service, sinks.begin(), sinks.end());
+  logger->set_pattern("%Y-%m-%d %H:%M:%S.%e %n[%P] %l: %v");
+  logger->flush_on(spdlog::level::info);
+  spdlog::set_default_logger(logger);
+}
+
+void MakeDirectories(const std::string& path) {
+  for (size_t slash = path.find('/', 1); ; slash = path.find('/', slash + 1)) {
+    mkdir(path.substr(0, slash).c_str(), 0700);
+    if (slash == std::string::npos) break;
+  }
 }
 
 namespace {

@@ -12,6 +12,15 @@ class Transport;
 // a lossy network for tests where tc netem is not available). Seeded from the pid.
 std::unique_ptr<Transport> MakeServiceTransport(const std::string& url, double receive_loss);
 
+// Makes spdlog's default logger "<service>" write every line to stderr (the journal under
+// systemd) and, when log_file is not "", append it to that file; flushed per line, so a kill -9
+// loses nothing. Throws std::invalid_argument naming the file when it cannot be opened.
+void SetUpServiceLog(const std::string& service, const std::string& log_file);
+
+// mkdir -p with mode 0700 for the directories it creates (state directories). Errors are left
+// to the first use of the directory.
+void MakeDirectories(const std::string& path);
+
 // Installs SIGINT/SIGTERM handlers that set a flag read by StopRequested().
 void InstallStopSignals();
 bool StopRequested();

@@ -12,10 +12,15 @@
 namespace idrig {
 
 using HmacKey = std::vector<uint8_t>;
+class ReplayStore;  // core/transport/auth.h
 
-// Reads a hex key file (whitespace ignored). Throws std::invalid_argument naming the file
-// when it is missing, not hex, or shorter than 16 bytes.
+// Reads a hex key file (whitespace ignored). Throws std::invalid_argument naming the file and
+// saying how to fix it when it is missing, not hex, readable by group or others, or too weak
+// (CheckKeyStrength).
 HmacKey ReadKeyFile(const std::string& path);
+// Throws std::invalid_argument (what + the reason + how to make a good key) for a key shorter
+// than 32 bytes, one that repeats a pattern (all-zero, "abab…"), or one with few distinct bytes.
+void CheckKeyStrength(const HmacKey& key, const std::string& what);
 // Writes 32 bytes from the OS's random source as hex, mode 0600.
 HmacKey WriteNewKeyFile(const std::string& path);
 std::string ToHex(const uint8_t* data, size_t size);
@@ -36,12 +41,16 @@ const char* ToString(CommandCheck check);
 class CommandVerifier {
  public:
   void AddKey(int32_t key_id, HmacKey key) { keys_[key_id] = std::move(key); }
+  // Keeps the last accepted seq per key id in `store` too (on disk): a restarted rig refuses
+  // recorded commands as well. The store must outlive the verifier.
+  void UseStore(ReplayStore* store) { store_ = store; }
   // Checks signature, then freshness; on kOk records seq as the last accepted one.
   CommandCheck Verify(const actuator_command_t& command);
 
  private:
   std::map<int32_t, HmacKey> keys_;
   std::map<int32_t, int64_t> last_seq_;
+  ReplayStore* store_ = nullptr;
 };
 
 }  // namespace idrig

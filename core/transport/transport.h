@@ -6,12 +6,15 @@
 #include <atomic>
 #include <cstdint>
 #include <cstring>
+#include <exception>
 #include <functional>
 #include <memory>
 #include <mutex>
 #include <random>
 #include <string>
 #include <vector>
+
+#include "core/transport/plausible.h"
 
 namespace idrig {
 
@@ -58,7 +61,7 @@ class Transport {
 };
 
 // Decodes bytes as T. Counts and returns false (never throws) for a foreign fingerprint, a
-// failed decode or a message above max_size bytes (0: no limit).
+// failed (or throwing) decode or a message above max_size bytes (0: no limit).
 template <class T>
 bool Decode(const uint8_t* data, size_t size, T* out, TransportCounters* counters,
             size_t max_size = 0) {
@@ -77,7 +80,18 @@ bool Decode(const uint8_t* data, size_t size, T* out, TransportCounters* counter
     if (counters) ++counters->foreign;
     return false;
   }
-  if (out->decode(data, 0, static_cast<int>(size)) < 0) {
+  if (!PlausibleArrays<T>(data, size)) {  // a count the message cannot hold (plausible.h)
+    if (counters) ++counters->undecodable;
+    return false;
+  }
+  // lcm-gen's decoders throw (std::length_error) on a string whose length field is 0 or
+  // negative (found by tests/fuzz/fuzz_messages): undecodable, like any other bad message.
+  try {
+    if (out->decode(data, 0, static_cast<int>(size)) < 0) {
+      if (counters) ++counters->undecodable;
+      return false;
+    }
+  } catch (const std::exception&) {
     if (counters) ++counters->undecodable;
     return false;
   }

@@ -7,10 +7,12 @@
 //  - model_result_t -> stored once per request_id (committed, synchronous=FULL) -> result_ack_t.
 //  - experiment_status_t -> the experiments table (lineage of every model).
 #include <map>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "core/catalog/catalog.h"
+#include "core/transport/auth.h"
 #include "core/transport/status.h"
 #include "core/transport/transport.h"
 
@@ -20,6 +22,11 @@ struct CatalogConfig {
   std::string db_path = "idrig-catalog.db";
   double lease_s = 5.0;         // a worker must renew its claim within this time
   double offer_period_s = 1.0;  // how often open jobs are offered again
+  KeyRing keys;                 // operator (requests, replies) and service (claims, results) keys
+  std::string state_dir;        // replay marks ("" = memory only)
+  double auth_window_s = 300;
+  // Keys "db_path", "lease_s", "offer_period_s", "operator_key_file", "service_key_file",
+  // "state_dir", "auth_window_s".
   static CatalogConfig FromJson(const nlohmann::json& config);
 };
 
@@ -32,10 +39,16 @@ class CatalogService {
   nlohmann::json Details();
 
  private:
-  void OnIdentifyRequest(const uint8_t* data, size_t size);
-  void OnClaim(const uint8_t* data, size_t size);
-  void OnResult(const uint8_t* data, size_t size);
-  void OnExperimentStatus(const uint8_t* data, size_t size);
+  void OnIdentifyRequest(const std::string& channel, const uint8_t* data, size_t size);
+  void OnClaim(const std::string& channel, const uint8_t* data, size_t size);
+  void OnResult(const std::string& channel, const uint8_t* data, size_t size);
+  void OnExperimentStatus(const std::string& channel, const uint8_t* data, size_t size);
+  // Why a new identify request cannot be a job ("" when it can).
+  std::string Refusal(const std::string& rig_id, int64_t experiment_id, const std::string& method,
+                      const std::string& options_json);
+  void Reply(const std::string& rig_id, int64_t request_id, int64_t experiment_id, int32_t state,
+             int64_t model_id, const std::string& message);
+  void ReplyWithJobState(const JobRecord& job);
   void SendClaim(const std::string& rig_id, int64_t request_id, int32_t kind,
                  const std::string& worker_id, int attempt);
 
@@ -43,6 +56,10 @@ class CatalogService {
   CatalogConfig config_;
   Catalog catalog_;
   StatusReporter reporter_;
+  int64_t start_utime_;
+  EnvelopeVerifier verifier_;
+  std::optional<EnvelopeSigner> service_signer_, operator_signer_;
+  int64_t refused_requests_ = 0, refused_results_ = 0;
   int64_t claim_seq_ = 0, last_offer_us_ = 0;
   std::map<std::string, std::string> last_experiment_state_;
   int64_t stored_ = 0, duplicates_ = 0, acks_ = 0, grants_ = 0;

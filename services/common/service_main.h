@@ -3,6 +3,9 @@
 // override single config keys; builds the LCM transport, constructs the service from its config,
 // and polls until SIGINT/SIGTERM. Errors (bad config, no plant, …) print one line and exit 1.
 #include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
 #include <iostream>
 #include <string>
 #include <vector>
@@ -24,15 +27,17 @@ template <class Service, class Config>
 int RunServiceMain(int argc, char** argv, const std::string& name, const std::string& summary,
                    const std::vector<ConfigFlag>& flags, int poll_ms) {
   CLI::App app{name + ": " + summary};
-  std::string config_file, url;
+  std::string config_file, url, log_file;
   double loss = -1;
   app.add_option("--config", config_file, "JSON config file");
   app.add_option("--url", url, "LCM URL (default: config 'lcm_url', else LCM_DEFAULT_URL)");
+  app.add_option("--log-file", log_file, "also append the log to this file (config 'log_file')");
   app.add_option("--loss", loss, "drop this fraction of received messages (tests of a lossy network)");
   std::vector<std::string> values(flags.size());
   for (size_t i = 0; i < flags.size(); ++i)
     app.add_option(flags[i].flag, values[i], flags[i].help + " (config '" + flags[i].key + "')");
   CLI11_PARSE(app, argc, argv);
+  bool logging = false;
   try {
     nlohmann::json config = ReadJsonConfig(config_file);
     for (size_t i = 0; i < flags.size(); ++i) {
@@ -46,14 +51,22 @@ int RunServiceMain(int argc, char** argv, const std::string& name, const std::st
         throw std::invalid_argument(flags[i].flag + " expects a number, got '" + values[i] + "'");
       config[flags[i].key] = parsed;
     }
+    if (log_file.empty()) log_file = ConfigValue<std::string>(config, "log_file", "");
+    SetUpServiceLog(name, log_file);
+    logging = true;
     if (url.empty()) url = ConfigValue<std::string>(config, "lcm_url", "");
     auto transport = MakeServiceTransport(
         url, loss >= 0 ? loss : ConfigValue<double>(config, "receive_loss", 0.0));
     Service service(*transport, Config::FromJson(config));
     InstallStopSignals();
+    spdlog::info("started (pid {}, url {})", getpid(), url.empty() ? "LCM default" : url);
     while (!StopRequested()) service.Poll(poll_ms);
+    spdlog::info("stopping on a signal");
   } catch (const std::exception& e) {
-    std::cerr << name << ": " << e.what() << "\n";
+    if (logging)
+      spdlog::critical("{}", e.what());
+    else
+      std::cerr << name << ": " << e.what() << "\n";
     return 1;
   }
   return 0;

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "core/numeric/signal/excitation.h"
+#include "core/transport/auth.h"
 #include "core/transport/signing.h"
 #include "core/transport/status.h"
 #include "core/transport/transport.h"
@@ -22,15 +23,23 @@ namespace idrig {
 
 struct ExciteConfig {
   std::string rig_id = "sim1";
-  HmacKey key;  // shared with the rig
+  HmacKey key;  // command key, shared with the rig
   int32_t key_id = 1;
+  KeyRing keys;                // the operator key: experiment requests are signed with it
+  std::string state_dir;       // replay marks of request senders ("" = memory only)
+  double auth_window_s = 300;  // requests signed further than this from now are refused
+  // The rig's limits (a request beyond one is refused at once, naming it).
+  double max_duration_s = 3600.0;
+  int64_t max_samples = 10000000;
+  double min_sample_rate_hz = 0.01, max_sample_rate_hz = 20000.0;
   int block_samples = 10;     // samples per actuator_command_t
   double max_abs = 10.0;      // |u| limit [actuator units] (a request may only lower it)
   double max_rate = 0.0;      // |du/dt| limit [units/s]; 0: unchecked
   double max_speed = 1000.0;  // largest experiment-time / wall-time ratio accepted
   double status_period_s = 0.5;
-  // Reads keys "rig_id", "key_file", "key_id", "block_samples", "max_abs", "max_rate",
-  // "max_speed", "status_period_s".
+  // Reads keys "rig_id", "key_file", "key_id", "operator_key_file", "state_dir",
+  // "auth_window_s", "block_samples", "max_abs", "max_rate", "max_speed", "max_duration_s",
+  // "max_samples", "min_sample_rate_hz", "max_sample_rate_hz", "status_period_s".
   static ExciteConfig FromJson(const nlohmann::json& config);
 };
 
@@ -51,7 +60,9 @@ class ExciteService {
     int64_t start_wall_us = 0;
     int64_t next_sample = 0;
   };
-  void OnRequest(const uint8_t* data, size_t size);
+  void OnRequest(const std::string& channel, const uint8_t* data, size_t size);
+  void OnRigStatus(const uint8_t* data, size_t size);
+  void Reply(const experiment_request_t& request, int32_t state, const std::string& message);
   void Start(const experiment_request_t& request);
   void Stop(const experiment_request_t& request);
   void SendCommand(int64_t experiment_id, int64_t first_sample, double fs, int32_t flags,
@@ -65,7 +76,10 @@ class ExciteService {
   ExperimentStatusPublisher status_;
   int64_t command_seq_;
   std::optional<Active> active_;
-  std::set<int64_t> seen_requests_;
+  EnvelopeVerifier verifier_;
+  std::optional<EnvelopeSigner> reply_signer_;
+  std::map<int64_t, std::pair<int32_t, std::string>> replies_;  // request id -> answer given
+  std::string reply_channel_;
 };
 
 }  // namespace idrig

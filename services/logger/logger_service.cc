@@ -1,5 +1,7 @@
 #include "services/logger/logger_service.h"
 
+#include <spdlog/spdlog.h>
+
 #include <chrono>
 #include <cstdio>
 #include <idrig/actuator_command_t.hpp>
@@ -109,10 +111,15 @@ void LoggerService::WriterLoop() {
   ExperimentStore store(config_.db_path);
   std::unique_ptr<lcm::LogFile> lcmlog;
   if (!config_.lcmlog_path.empty()) {
-    lcmlog = std::make_unique<lcm::LogFile>(config_.lcmlog_path, "w");
+    // Appended, never truncated: a restart (systemd's Restart=always after a crash) keeps the
+    // log of everything recorded before.
+    lcmlog = std::make_unique<lcm::LogFile>(config_.lcmlog_path, "a");
     if (!lcmlog->good()) {
       ++transport_.counters().handler_errors;
+      spdlog::error("cannot append to the .lcmlog '{}': not written", config_.lcmlog_path);
       lcmlog.reset();
+    } else {
+      spdlog::info("appending to the .lcmlog '{}'", config_.lcmlog_path);
     }
   }
   auto last_summary = std::chrono::steady_clock::now() - std::chrono::seconds(10);
@@ -294,6 +301,13 @@ void LoggerService::UpdateSummary(ExperimentStore& store) {
     const auto missing = store.MissingBlocks(e.rig_id, e.experiment_id);
     std::vector<int64_t> shown(missing.begin(),
                                missing.begin() + std::min<size_t>(missing.size(), 50));
+    // Commands the logger did not hear (it was down, or they were lost): named by sample range.
+    // The measured u in the blocks is what the rig applied, so the record stays consistent.
+    nlohmann::json without_command = nlohmann::json::array();
+    if (e.ended)
+      for (const auto& [first, last] :
+           store.SamplesWithoutCommand(e.rig_id, e.experiment_id, e.samples_total))
+        if (without_command.size() < 20) without_command.push_back({first, last});
     list.push_back({{"rig_id", e.rig_id},
                     {"experiment_id", e.experiment_id},
                     {"blocks", e.blocks_stored},
@@ -302,6 +316,7 @@ void LoggerService::UpdateSummary(ExperimentStore& store) {
                     {"blocks_total", e.blocks_total},
                     {"missing_count", missing.size()},
                     {"missing", shown},
+                    {"samples_without_command", without_command},
                     {"complete", e.ended && missing.empty()}});
   }
   std::lock_guard<std::mutex> lock(summary_mutex_);

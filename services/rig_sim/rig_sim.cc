@@ -8,6 +8,7 @@
 #include "core/io/model_json.h"
 #include "core/transport/channels.h"
 #include "core/transport/service_util.h"
+#include <spdlog/spdlog.h>
 
 namespace idrig {
 
@@ -30,6 +31,12 @@ RigSimConfig RigSimConfig::FromJson(const nlohmann::json& c) {
   config.block_samples = ConfigValue<int>(c, "block_samples", config.block_samples);
   config.keep_experiments = ConfigValue<int>(c, "keep_experiments", config.keep_experiments);
   config.status_period_s = ConfigValue<double>(c, "status_period_s", config.status_period_s);
+  config.min_sample_rate_hz = ConfigValue<double>(c, "min_sample_rate_hz", config.min_sample_rate_hz);
+  config.max_sample_rate_hz = ConfigValue<double>(c, "max_sample_rate_hz", config.max_sample_rate_hz);
+  config.max_samples = ConfigValue<int64_t>(c, "max_samples", config.max_samples);
+  config.max_late_start_samples =
+      ConfigValue<int64_t>(c, "max_late_start_samples", config.max_late_start_samples);
+  config.state_dir = ConfigValue<std::string>(c, "state_dir", config.state_dir);
   if (c.contains("effect")) config.effect = EffectFromJson(c["effect"]);
   const std::string key_file = ConfigValue<std::string>(c, "key_file", "");
   if (!key_file.empty()) config.keys[ConfigValue<int32_t>(c, "key_id", 1)] = ReadKeyFile(key_file);
@@ -40,6 +47,8 @@ RigSim::RigSim(Transport& transport, RigSimConfig config)
     : transport_(transport),
       config_(std::move(config)),
       reporter_(transport, "rig_sim", "rig_sim-" + config_.rig_id),
+      journal_(config_.state_dir),
+      command_marks_(config_.state_dir.empty() ? "" : config_.state_dir + "/commands.hwm"),
       meas_channel_(Channel(config_.rig_id, ChannelKind::kMeasurement)),
       status_(transport, Channel(config_.rig_id, ChannelKind::kExperimentStatus),
               config_.status_period_s),
@@ -60,13 +69,64 @@ RigSim::RigSim(Transport& transport, RigSimConfig config)
   if (config_.block_samples < 1 || config_.block_samples > 3000)
     throw std::invalid_argument("block_samples must be in 1..3000 (one block < 60 KB)");
   for (const auto& [id, key] : config_.keys) verifier_.AddKey(id, key);
+  verifier_.UseStore(&command_marks_);
   last_u_ = config_.safe_input;
+  Recover();
   transport_.Subscribe(
       Channel(config_.rig_id, ChannelKind::kCommand),
       [this](const std::string&, const uint8_t* d, size_t n) { OnCommand(d, n); }, 10000);
   transport_.Subscribe(
       Channel(config_.rig_id, ChannelKind::kRigReplayRequest),
       [this](const std::string&, const uint8_t* d, size_t n) { OnReplayRequest(d, n); }, 100);
+}
+
+// After a restart: experiments the journal shows unfinished were interrupted. Their blocks are
+// kept for re-sending, their end is published as STATE_INTERRUPTED naming what is missing, and
+// late commands for them are refused (never adopted: the plant's state is unknown).
+void RigSim::Recover() {
+  for (auto& e : journal_.Load()) {
+    int64_t samples = 0;
+    for (const auto& bytes : e.blocks) {
+      measurement_block_t block;
+      if (Decode(bytes.data(), bytes.size(), &block, nullptr)) samples += block.n_samples;
+    }
+    ended_ids_[e.experiment_id] = true;
+    sent_blocks_[e.experiment_id] = std::move(e.blocks);
+    if (e.ended) continue;
+    experiment_status_t status{};
+    status.source = "rig";
+    status.rig_id = config_.rig_id;
+    status.experiment_id = e.experiment_id;
+    status.state = experiment_status_t::STATE_INTERRUPTED;
+    status.samples_done = samples;
+    status.samples_total = samples;
+    status.blocks_total = static_cast<int64_t>(sent_blocks_[e.experiment_id].size());
+    status.end_utime = NowMicros();
+    status.message = "interrupted: the rig restarted during the experiment; samples 0.." +
+                     std::to_string(samples - 1) + " measured, samples from " +
+                     std::to_string(samples) + " on missing (not measured)";
+    spdlog::warn("experiment {}: {}", e.experiment_id, status.message);
+    journal_.End(e.experiment_id, status.message);
+    status_.Finished(status);
+  }
+  while (static_cast<int>(sent_blocks_.size()) > config_.keep_experiments)
+    sent_blocks_.erase(sent_blocks_.begin());
+}
+
+void RigSim::RefuseUnknown(const actuator_command_t& command, const std::string& why) {
+  experiment_status_t status{};
+  status.source = "rig";
+  status.rig_id = config_.rig_id;
+  status.experiment_id = command.experiment_id;
+  status.state = experiment_status_t::STATE_INTERRUPTED;
+  status.sample_rate_hz = command.sample_rate_hz;
+  status.end_utime = NowMicros();
+  status.message = why;
+  last_refusal_ = "experiment " + std::to_string(command.experiment_id) + " refused: " + why;
+  spdlog::warn("{}", last_refusal_);
+  ended_ids_[command.experiment_id] = true;
+  journal_.End(command.experiment_id, why);
+  status_.Finished(status);
 }
 
 void RigSim::OnReplayRequest(const uint8_t* data, size_t size) {
@@ -96,6 +156,9 @@ void RigSim::OnCommand(const uint8_t* data, size_t size) {
       ++counters.unsigned_count;
     last_refusal_ =
         std::string("command seq ") + std::to_string(command.seq) + " refused: " + ToString(check);
+    const int64_t refused = counters.forged + counters.replayed + counters.unsigned_count;
+    if (refused <= 20 || refused % 1000 == 0)
+      spdlog::warn("{} [{} refused so far]", last_refusal_, refused);
     return;
   }
   if (command.rig_id != config_.rig_id) return;
@@ -119,6 +182,7 @@ void RigSim::OnCommand(const uint8_t* data, size_t size) {
     if (!why.empty()) {
       ++counters.over_limit;
       last_refusal_ = "command seq " + std::to_string(command.seq) + " refused: " + why;
+      spdlog::warn("{}", last_refusal_);
       if (experiment_ && experiment_->status.experiment_id == command.experiment_id)
         End(experiment_status_t::STATE_FAILED, last_refusal_ + "; safe input applied");
       else
@@ -132,6 +196,17 @@ void RigSim::OnCommand(const uint8_t* data, size_t size) {
       End(experiment_status_t::STATE_FAILED,
           "superseded by experiment " + std::to_string(command.experiment_id));
     if (command.flags & actuator_command_t::FLAG_STOP) return;
+    const double fs = command.sample_rate_hz;
+    if (!(fs >= config_.min_sample_rate_hz && fs <= config_.max_sample_rate_hz))
+      return RefuseUnknown(command, "sample rate " + std::to_string(fs) +
+                                        " Hz outside the rig's range [" +
+                                        std::to_string(config_.min_sample_rate_hz) + ", " +
+                                        std::to_string(config_.max_sample_rate_hz) + "] Hz");
+    if (command.first_sample > config_.max_late_start_samples)
+      return RefuseUnknown(command, "the rig did not see samples 0.." +
+                                        std::to_string(command.first_sample - 1) +
+                                        " of this experiment (restarted or joined late): "
+                                        "not adopted, no sample invented");
     StartExperiment(command);
   }
   Experiment& e = *experiment_;
@@ -151,6 +226,10 @@ void RigSim::OnCommand(const uint8_t* data, size_t size) {
     ApplySample(command.u[i]);
   }
   e.status.samples_done = e.next_sample;
+  if (e.next_sample > config_.max_samples)
+    return End(experiment_status_t::STATE_FAILED,
+               "more than the rig's maximum of " + std::to_string(config_.max_samples) +
+                   " samples; safe input applied");
   if (command.flags & actuator_command_t::FLAG_FINAL)
     End(experiment_status_t::STATE_DONE,
         e.command_gaps ? std::to_string(e.command_gaps) + " samples held over lost commands" : "");
@@ -179,6 +258,9 @@ void RigSim::StartExperiment(const actuator_command_t& command) {
   e.status.sample_rate_hz = command.sample_rate_hz;
   e.status.start_utime = NowMicros();
   e.block_first = 0;
+  journal_.Prune(config_.keep_experiments);
+  journal_.Begin(command.experiment_id);
+  spdlog::info("experiment {} started at {} Hz", command.experiment_id, command.sample_rate_hz);
   experiment_ = std::move(e);
   status_.Publish(experiment_->status);
 }
@@ -231,6 +313,7 @@ void RigSim::FlushBlock() {
   std::vector<uint8_t> bytes(block.getEncodedSize());
   block.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   transport_.Publish(meas_channel_, bytes.data(), bytes.size());
+  journal_.Append(block.experiment_id, bytes);
   auto& kept = sent_blocks_[block.experiment_id];
   kept.push_back(std::move(bytes));
   while (static_cast<int>(sent_blocks_.size()) > config_.keep_experiments)
@@ -249,7 +332,12 @@ void RigSim::End(int32_t state, const std::string& message) {
   e.status.end_utime = NowMicros();
   e.status.message = message;
   last_u_ = config_.safe_input;  // safe input after every experiment
+  journal_.End(e.status.experiment_id, message);  // on disk before it is announced
   status_.Finished(e.status);
+  static const char* names[] = {"pending", "running", "done", "stopped", "failed", "interrupted"};
+  spdlog::log(state == experiment_status_t::STATE_DONE ? spdlog::level::info : spdlog::level::warn,
+              "experiment {} ended {}: {} samples, {} blocks; {}", e.status.experiment_id,
+              state >= 0 && state <= 5 ? names[state] : "?", e.next_sample, e.block_seq, message);
   ended_ids_[e.status.experiment_id] = true;
   experiment_.reset();
 }

@@ -17,7 +17,9 @@
 
 #include "core/numeric/gap/effects.h"
 #include "core/numeric/model/lti_model.h"
+#include "core/transport/auth.h"
 #include "core/transport/signing.h"
+#include "services/rig_sim/rig_journal.h"
 #include "core/transport/status.h"
 #include "core/transport/transport.h"
 
@@ -36,11 +38,20 @@ struct RigSimConfig {
   int keep_experiments = 4;         // experiments whose blocks are kept for re-sending
   std::map<int32_t, HmacKey> keys;  // accepted keys by key id
   double status_period_s = 0.5;
+  // Limits of the rig, checked on the first command of an experiment and on every sample.
+  double min_sample_rate_hz = 0.01, max_sample_rate_hz = 20000.0;
+  int64_t max_samples = 10000000;
+  // A command of an experiment the rig has not seen start, beyond this sample, is refused (the
+  // rig cannot know the plant's state there: it would invent samples 0 .. first-1).
+  int64_t max_late_start_samples = 100;
+  // Replay marks of commands and the journal of published blocks (RigJournal); "" = memory only.
+  std::string state_dir;
   // An unmodelled effect of the gap-diagnosis library on the plant (docs/gap.md); none by
   // default. Needs a continuous plant. Config key "effect": {"effect": name, "params": {…}}.
   Effect effect;
   // Keys: "rig_id", "model_file" or "model" (idrig.model/1), "noise_std", "seed", "max_abs",
-  // "max_rate", "watchdog_s", "safe_input", "block_samples", "key_file" + "key_id", "effect".
+  // "max_rate", "watchdog_s", "safe_input", "block_samples", "key_file" + "key_id", "effect", "state_dir",
+  // "min_sample_rate_hz", "max_sample_rate_hz", "max_samples", "max_late_start_samples".
   static RigSimConfig FromJson(const nlohmann::json& config);
 };
 
@@ -73,10 +84,14 @@ class RigSim {
   void ApplySample(double u);
   void FlushBlock();
   void End(int32_t state, const std::string& message);
+  void Recover();
+  void RefuseUnknown(const actuator_command_t& command, const std::string& why);
 
   Transport& transport_;
   RigSimConfig config_;
   StatusReporter reporter_;
+  RigJournal journal_;  // before command_marks_: it creates the state directory
+  ReplayStore command_marks_;
   CommandVerifier verifier_;
   std::string meas_channel_;
   ExperimentStatusPublisher status_;

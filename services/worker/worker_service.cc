@@ -9,6 +9,7 @@
 #include <idrig/replay_done_t.hpp>
 #include <idrig/replay_request_t.hpp>
 #include <idrig/result_ack_t.hpp>
+#include <spdlog/spdlog.h>
 #include <thread>
 
 #include "core/io/model_json.h"
@@ -30,6 +31,9 @@ WorkerConfig WorkerConfig::FromJson(const nlohmann::json& c) {
   config.data_timeout_s = ConfigValue<double>(c, "data_timeout_s", config.data_timeout_s);
   config.debug_delay_s = ConfigValue<double>(c, "debug_delay_s", config.debug_delay_s);
   config.cache_experiments = ConfigValue<int>(c, "cache_experiments", config.cache_experiments);
+  config.keys = KeyRing::FromConfig(c);
+  config.state_dir = ConfigValue<std::string>(c, "state_dir", config.state_dir);
+  config.auth_window_s = ConfigValue<double>(c, "auth_window_s", config.auth_window_s);
   return config;
 }
 
@@ -82,10 +86,11 @@ std::string RecordHash(const IoRecord& record) {
 namespace {
 std::string DefaultWorkerId() { return "worker-" + HostName() + "-" + std::to_string(getpid()); }
 int64_t Us(double seconds) { return static_cast<int64_t>(seconds * 1e6); }
+constexpr double kUnansweredClaimS = 3.0;
 
 // Runs in the compute thread: no transport access here.
 model_result_t Compute(identify_request_t request, IoRecord record, std::string worker_id,
-                       int attempt, double debug_delay_s) {
+                       int attempt, double debug_delay_s, nlohmann::json record_lineage) {
   model_result_t r{};
   r.request_id = request.request_id;
   r.rig_id = request.rig_id;
@@ -102,9 +107,11 @@ model_result_t Compute(identify_request_t request, IoRecord record, std::string 
   const auto start = std::chrono::steady_clock::now();
   try {
     r.data_hash = RecordHash(record);
-    const nlohmann::json options = nlohmann::json::parse(r.options_json);
+    nlohmann::json options = nlohmann::json::parse(r.options_json);
+    options.erase("segment");  // the worker's option (which samples), not the method's
     MethodReport report = RunMethod(request.method, record, options);
     nlohmann::json json = report.json;
+    json["record"] = record_lineage;  // which samples were used, and the experiment's end
     // The same measure for every method: simulation fit 100·(1 − NRMSE) of the model on the
     // whole record (core/numeric/validation.h), so models of different methods compare.
     try {
@@ -138,7 +145,24 @@ WorkerService::WorkerService(Transport& transport, WorkerConfig config)
         if (config.worker_id.empty()) config.worker_id = DefaultWorkerId();
         return std::move(config);
       }()),
-      reporter_(transport, "worker", config_.worker_id) {
+      reporter_(transport, "worker", config_.worker_id),
+      verifier_(config_.keys,
+                config_.state_dir.empty() ? "" : config_.state_dir + "/" + config_.worker_id + ".hwm",
+                config_.auth_window_s, "idrig-worker") {
+  if (!config_.keys.Has(kServiceRole))
+    throw std::invalid_argument(
+        "idrig-worker needs the service key (service_key_file): claims and results are signed");
+  signer_.emplace(kServiceRole, *config_.keys.Find(kServiceRole), config_.worker_id);
+  auto signed_subscribe = [this](ChannelKind kind,
+                                 void (WorkerService::*handler)(const std::string&, const uint8_t*,
+                                                                size_t)) {
+    transport_.Subscribe(
+        AnyRigChannel(kind),
+        [this, handler](const std::string& c, const uint8_t* d, size_t n) {
+          (this->*handler)(c, d, n);
+        },
+        1000);
+  };
   auto subscribe = [this](ChannelKind kind, void (WorkerService::*handler)(const uint8_t*, size_t),
                           int capacity) {
     transport_.Subscribe(
@@ -146,22 +170,27 @@ WorkerService::WorkerService(Transport& transport, WorkerConfig config)
         [this, handler](const std::string&, const uint8_t* d, size_t n) { (this->*handler)(d, n); },
         capacity);
   };
-  subscribe(ChannelKind::kIdentifyRequest, &WorkerService::OnRequest, 1000);
-  subscribe(ChannelKind::kClaim, &WorkerService::OnClaim, 1000);
+  signed_subscribe(ChannelKind::kIdentifyRequest, &WorkerService::OnRequest);
+  signed_subscribe(ChannelKind::kClaim, &WorkerService::OnClaim);
+  signed_subscribe(ChannelKind::kAck, &WorkerService::OnAck);
   subscribe(ChannelKind::kMeasurement, &WorkerService::OnBlock, 100000);
   subscribe(ChannelKind::kReplay, &WorkerService::OnBlock, 100000);
   subscribe(ChannelKind::kExperimentStatus, &WorkerService::OnStatus, 1000);
   subscribe(ChannelKind::kReplayDone, &WorkerService::OnReplayDone, 1000);
-  subscribe(ChannelKind::kAck, &WorkerService::OnAck, 1000);
 }
 
 WorkerService::~WorkerService() {
   if (job_ && job_->future.valid()) job_->future.wait();
 }
 
-void WorkerService::OnRequest(const uint8_t* data, size_t size) {
+void WorkerService::OnRequest(const std::string& channel, const uint8_t* data, size_t size) {
   identify_request_t request;
-  if (!Decode(data, size, &request, &transport_.counters(), 65536)) return;
+  // From the command line (operator key, when this worker holds it) or re-offered by the
+  // catalogue (service key). Without the operator key the worker waits for the re-offer.
+  std::vector<std::string> roles = {kServiceRole};
+  if (config_.keys.Has(kOperatorRole)) roles.push_back(kOperatorRole);
+  if (!verifier_.Open(channel, data, size, roles, &request, nullptr, &transport_.counters()))
+    return;
   if (finished_.count(request.request_id)) return;
   if (job_ && job_->request.request_id == request.request_id) return;
   offers_.emplace(request.request_id, request);
@@ -175,12 +204,13 @@ void WorkerService::SendClaim(const identify_request_t& request) {
   claim.rig_id = request.rig_id;
   claim.kind = identify_claim_t::KIND_CLAIM;
   claim.worker_id = config_.worker_id;
-  transport_.PublishMessage(Channel(request.rig_id, ChannelKind::kClaim), claim);
+  signer_->Publish(transport_, Channel(request.rig_id, ChannelKind::kClaim), claim);
 }
 
-void WorkerService::OnClaim(const uint8_t* data, size_t size) {
+void WorkerService::OnClaim(const std::string& channel, const uint8_t* data, size_t size) {
   identify_claim_t claim;
-  if (!Decode(data, size, &claim, &transport_.counters(), 65536)) return;
+  if (!verifier_.Open(channel, data, size, {kServiceRole}, &claim, nullptr, &transport_.counters()))
+    return;
   if (claim.kind == identify_claim_t::KIND_CLAIM) return;  // other workers' claims
   const int64_t id = claim.request_id;
   const bool mine = claim.worker_id == config_.worker_id;
@@ -253,6 +283,8 @@ void WorkerService::OnStatus(const uint8_t* data, size_t size) {
   if (!Decode(data, size, &status, &transport_.counters(), 65536)) return;
   if (status.source != "rig" || status.state == experiment_status_t::STATE_RUNNING) return;
   blocks_total_[{status.rig_id, status.experiment_id}] = status.blocks_total;
+  ends_[{status.rig_id, status.experiment_id}] = status;
+  while (ends_.size() > 64) ends_.erase(ends_.begin());
 }
 
 bool WorkerService::HaveCompleteRecord(const Job& job) const {
@@ -309,9 +341,29 @@ void WorkerService::StartCompute() {
     Fail(std::string("cannot assemble the record: ") + e.what());
     return;
   }
+  // A record that did not end as planned (interrupted by a rig restart, failed, stopped) is
+  // only used when the request asks for what was measured: {"segment": "longest_complete"}.
+  nlohmann::json lineage = {{"first_sample", 0}, {"samples_used", record.NumSamples()},
+                            {"experiment_state", "done"}};
+  auto end = ends_.find(key);
+  if (end != ends_.end() && end->second.state != experiment_status_t::STATE_DONE) {
+    static const char* names[] = {"pending", "running", "done", "stopped", "failed", "interrupted"};
+    const int32_t state = end->second.state;
+    const std::string state_name = state >= 0 && state <= 5 ? names[state] : "unknown";
+    const nlohmann::json options = nlohmann::json::parse(job.request.options_json, nullptr, false);
+    if (!options.is_object() || options.value("segment", "") != "longest_complete") {
+      Fail("experiment " + std::to_string(job.request.experiment_id) + " " + state_name + " (" +
+           end->second.message + "): the record is incomplete; ask with "
+           "{\"segment\": \"longest_complete\"} to identify from samples 0.." +
+           std::to_string(record.NumSamples() - 1));
+      return;
+    }
+    lineage["experiment_state"] = state_name;
+    lineage["rig_message"] = end->second.message;
+  }
   job.phase = Phase::kComputing;
   job.future = std::async(std::launch::async, Compute, job.request, std::move(record),
-                          config_.worker_id, job.attempt, config_.debug_delay_s);
+                          config_.worker_id, job.attempt, config_.debug_delay_s, lineage);
 }
 
 void WorkerService::Fail(const std::string& message) {
@@ -332,11 +384,13 @@ void WorkerService::Fail(const std::string& message) {
   job.phase = Phase::kPublishing;
   job.last_publish_us = 0;
   last_message_ = message;
+  spdlog::warn("job {} failed: {}", job.request.request_id, message);
 }
 
-void WorkerService::OnAck(const uint8_t* data, size_t size) {
+void WorkerService::OnAck(const std::string& channel, const uint8_t* data, size_t size) {
   result_ack_t ack;
-  if (!Decode(data, size, &ack, &transport_.counters(), 65536)) return;
+  if (!verifier_.Open(channel, data, size, {kServiceRole}, &ack, nullptr, &transport_.counters()))
+    return;
   if (!job_ || job_->phase != Phase::kPublishing || ack.request_id != job_->request.request_id)
     return;
   FinishJob();
@@ -376,13 +430,20 @@ void WorkerService::Tick() {
         now - job_->last_publish_us >= Us(config_.result_retry_s)) {
       job_->last_publish_us = now;
       job_->result.utime = now;
-      transport_.PublishMessage(Channel(job_->request.rig_id, ChannelKind::kResult), job_->result);
+      signer_->Publish(transport_, Channel(job_->request.rig_id, ChannelKind::kResult),
+                       job_->result);
     }
   } else if (!offers_.empty()) {
     // One claim at a time, oldest offer first; re-sent until the catalogue answers.
     auto offer = offers_.begin();
     if (claiming_ != 0 && offers_.count(claiming_)) offer = offers_.find(claiming_);
-    if (claiming_ != offer->first || now - last_claim_us_ >= Us(config_.claim_retry_s)) {
+    if (claiming_ == offer->first && now - claim_start_us_ > Us(kUnansweredClaimS)) {
+      // The catalogue does not know the job (it refused the request, or has not heard it):
+      // drop the offer; the catalogue offers the job again if it accepts it later.
+      offers_.erase(offer);
+      claiming_ = 0;
+    } else if (claiming_ != offer->first || now - last_claim_us_ >= Us(config_.claim_retry_s)) {
+      if (claiming_ != offer->first) claim_start_us_ = now;
       claiming_ = offer->first;
       last_claim_us_ = now;
       SendClaim(offer->second);
@@ -398,6 +459,7 @@ nlohmann::json WorkerService::Details() const {
   d["offers"] = offers_.size();
   d["replayed_blocks"] = replayed_blocks_;
   d["message"] = last_message_;
+  d["auth"] = verifier_.Details();
   if (job_) {
     static const char* phases[] = {"fetching", "computing", "publishing"};
     d["job"] = {{"request_id", job_->request.request_id},         {"method", job_->request.method},

@@ -10,6 +10,7 @@
 // A worker killed mid-job stops renewing its lease; the catalogue then offers the job again.
 #include <deque>
 #include <future>
+#include <idrig/experiment_status_t.hpp>
 #include <idrig/identify_request_t.hpp>
 #include <idrig/measurement_block_t.hpp>
 #include <idrig/model_result_t.hpp>
@@ -20,6 +21,7 @@
 #include <string>
 
 #include "core/numeric/io_record.h"
+#include "core/transport/auth.h"
 #include "core/transport/status.h"
 #include "core/transport/transport.h"
 
@@ -34,6 +36,10 @@ struct WorkerConfig {
   double data_timeout_s = 60.0;  // no complete record by then: the job fails
   double debug_delay_s = 0.0;    // extra compute time (tests of a worker dying mid-job)
   int cache_experiments = 4;     // experiments whose blocks are kept in memory
+  KeyRing keys;                  // service key (claims, results; grants, acks); operator optional
+  std::string state_dir;         // replay marks ("" = memory only)
+  double auth_window_s = 300;
+  // Keys as the fields, plus "operator_key_file", "service_key_file".
   static WorkerConfig FromJson(const nlohmann::json& config);
 };
 
@@ -68,12 +74,12 @@ class WorkerService {
     std::future<model_result_t> future;
     model_result_t result{};
   };
-  void OnRequest(const uint8_t* data, size_t size);
-  void OnClaim(const uint8_t* data, size_t size);
+  void OnRequest(const std::string& channel, const uint8_t* data, size_t size);
+  void OnClaim(const std::string& channel, const uint8_t* data, size_t size);
   void OnBlock(const uint8_t* data, size_t size);
   void OnStatus(const uint8_t* data, size_t size);
   void OnReplayDone(const uint8_t* data, size_t size);
-  void OnAck(const uint8_t* data, size_t size);
+  void OnAck(const std::string& channel, const uint8_t* data, size_t size);
   void SendClaim(const identify_request_t& request);
   void RequestReplay();
   bool HaveCompleteRecord(const Job& job) const;
@@ -87,9 +93,12 @@ class WorkerService {
   std::map<ExperimentKey, std::map<int64_t, measurement_block_t>> cache_;
   std::deque<ExperimentKey> cache_order_;
   std::map<ExperimentKey, int64_t> blocks_total_;  // from the rig's final status
+  std::map<ExperimentKey, experiment_status_t> ends_;  // the rig's final status
+  EnvelopeVerifier verifier_;
+  std::optional<EnvelopeSigner> signer_;
   std::map<int64_t, identify_request_t> offers_;
   std::set<int64_t> finished_;
-  int64_t claiming_ = 0, last_claim_us_ = 0;
+  int64_t claiming_ = 0, last_claim_us_ = 0, claim_start_us_ = 0;
   std::optional<Job> job_;
   int64_t claim_seq_ = 0, replay_counter_ = 0, jobs_done_ = 0, replayed_blocks_ = 0;
   std::string last_message_;

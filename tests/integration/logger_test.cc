@@ -102,14 +102,16 @@ TEST(Logger, FindsGapsAndReplaysWhatIsMissing) {
   EXPECT_EQ(logger.stored_blocks(), 6);
 }
 
-TEST(Logger, AlsoWritesAnLcmlogThatLcmReads) {
+TEST(Logger, AlsoWritesAnLcmlogThatLcmReadsAndARestartAppendsToIt) {
   auto t = MakeLcmTransport("memq://");
   LoggerConfig config;
   config.db_path = TempPath("logger_lcmlog.db");
   config.lcmlog_path = TempPath("logger.lcmlog");
-  {
+  // Two runs of the logger (a restart): the second appends, the first run's events stay.
+  for (const auto& run : {std::vector<int64_t>{0, 1}, std::vector<int64_t>{2}}) {
+    t = MakeLcmTransport("memq://");  // a new process: its own transport
     LoggerService logger(*t, config);
-    for (int64_t seq : {0, 1, 2}) t->PublishMessage("IDRIG/rig-l/MEAS", Block(seq));
+    for (int64_t seq : run) t->PublishMessage("IDRIG/rig-l/MEAS", Block(seq));
     for (int i = 0; i < 5; ++i) logger.Poll(5);
     logger.Flush();
   }

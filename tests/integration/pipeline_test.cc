@@ -20,6 +20,9 @@
 #include "services/rig_sim/rig_sim.h"
 #include "services/worker/worker_service.h"
 
+#include <idrig/request_reply_t.hpp>
+#include "core/transport/auth.h"
+
 namespace idrig {
 namespace {
 
@@ -37,8 +40,24 @@ std::string TempPath(const std::string& name) {
   return path;
 }
 
+HmacKey TestKey(uint8_t salt) {
+  HmacKey key(32);
+  for (size_t i = 0; i < key.size(); ++i) key[i] = static_cast<uint8_t>(i * 41 + salt * 13 + 1);
+  return key;
+}
+
+KeyRing Keys() {
+  KeyRing ring;
+  ring.keys[kOperatorRole] = TestKey(1);
+  ring.keys[kServiceRole] = TestKey(2);
+  return ring;
+}
+
 struct Pipeline {
   std::unique_ptr<Transport> transport;
+  EnvelopeSigner operator_signer{kOperatorRole, TestKey(1), "cli:test"};
+  EnvelopeVerifier reply_verifier{Keys(), "", 60, "test"};
+  std::map<int64_t, request_reply_t> replies;
   std::unique_ptr<CatalogService> catalog;
   std::unique_ptr<LoggerService> logger;
   std::unique_ptr<RigSim> rig;
@@ -56,6 +75,7 @@ struct Pipeline {
     cc.db_path = catalog_path;
     cc.lease_s = 2.0;
     cc.offer_period_s = 0.3;
+    cc.keys = Keys();
     catalog = std::make_unique<CatalogService>(*transport, cc);
     LoggerConfig lc;
     lc.db_path = store_path;
@@ -78,6 +98,7 @@ struct Pipeline {
     ec.block_samples = 25;
     ec.max_abs = 2.0;
     ec.max_speed = 100000;
+    ec.keys = Keys();
     excite = std::make_unique<ExciteService>(*transport, ec);
     for (const char* id : {"w1", "w2"}) {
       WorkerConfig wc;
@@ -85,8 +106,15 @@ struct Pipeline {
       wc.replay_retry_s = 0.2;
       wc.result_retry_s = 0.2;
       wc.claim_retry_s = 0.1;
+      wc.keys = Keys();
       workers.push_back(std::make_unique<WorkerService>(*transport, wc));
     }
+    transport->Subscribe("IDRIG/rig-t/REQ_REPLY",
+                         [this](const std::string& c, const uint8_t* d, size_t n) {
+                           request_reply_t r;
+                           if (reply_verifier.Open(c, d, n, {kOperatorRole}, &r, nullptr, nullptr))
+                             replies[r.request_id] = r;
+                         });
   }
   void Poll() {
     transport->Handle(2);
@@ -107,7 +135,8 @@ struct Pipeline {
   }
 };
 
-void StartExperiment(Transport& t, int64_t experiment_id, const std::string& spec, double fs,
+// Published as the command line does: signed with the operator key, re-sent until answered.
+void StartExperiment(Pipeline& p, int64_t experiment_id, const std::string& spec, double fs,
                      double duration) {
   experiment_request_t r{};
   r.utime = NowMicros();
@@ -120,10 +149,13 @@ void StartExperiment(Transport& t, int64_t experiment_id, const std::string& spe
   r.duration_s = duration;
   r.speed = 2000;
   r.requested_by = "test";
-  t.PublishMessage(Channel("rig-t", ChannelKind::kExperimentRequest), r);
+  for (int i = 0; i < 20 && !p.replies.count(r.request_id); ++i) {
+    p.operator_signer.Publish(*p.transport, Channel("rig-t", ChannelKind::kExperimentRequest), r);
+    p.RunUntil([&] { return p.replies.count(r.request_id) > 0; }, 0.3);
+  }
 }
 
-void RequestModel(Transport& t, int64_t request_id, int64_t experiment_id,
+void RequestModel(Pipeline& p, int64_t request_id, int64_t experiment_id,
                   const std::string& method, const std::string& options) {
   identify_request_t r{};
   r.utime = NowMicros();
@@ -133,11 +165,14 @@ void RequestModel(Transport& t, int64_t request_id, int64_t experiment_id,
   r.method = method;
   r.options_json = options;
   r.requested_by = "test";
-  t.PublishMessage(Channel("rig-t", ChannelKind::kIdentifyRequest), r);
+  for (int i = 0; i < 20 && !p.replies.count(r.request_id); ++i) {
+    p.operator_signer.Publish(*p.transport, Channel("rig-t", ChannelKind::kIdentifyRequest), r);
+    p.RunUntil([&] { return p.replies.count(r.request_id) > 0; }, 0.3);
+  }
 }
 
 void RunFlow(Pipeline& p, double expected_loss) {
-  StartExperiment(*p.transport, 101, "prbs:bits=9,amp=1", 5.0, 204.4);  // 1022 samples, Ts 0.2 s
+  StartExperiment(p, 101, "prbs:bits=9,amp=1", 5.0, 204.4);  // 1022 samples, Ts 0.2 s
   Catalog reader(p.catalog_path);
   auto experiment_done = [&] {
     for (const auto& e : reader.Experiments("rig-t"))
@@ -145,8 +180,8 @@ void RunFlow(Pipeline& p, double expected_loss) {
     return false;
   };
   ASSERT_TRUE(p.RunUntil(experiment_done, 15.0)) << "the experiment did not finish";
-  RequestModel(*p.transport, 9001, 101, "arx-oe", "{\"order\":3}");
-  RequestModel(*p.transport, 9002, 101, "arx", "{\"order\":3}");
+  RequestModel(p, 9001, 101, "arx-oe", "{\"order\":3}");
+  RequestModel(p, 9002, 101, "arx", "{\"order\":3}");
   auto both = [&] { return reader.ModelForRequest(9001) && reader.ModelForRequest(9002); };
   ASSERT_TRUE(p.RunUntil(both, 20.0)) << "models not stored";
   // Let retries and re-offers settle, then check there is exactly one model per request.
@@ -221,7 +256,7 @@ TEST(Pipeline, ExperimentToModelsInTheCatalogue) {
 TEST(Pipeline, GapDiagnosisJobFindsTheRigsEffect) {
   const double width = 0.3;
   Pipeline p(MakeLcmTransport("memq://"), "gap", 50, Effect{EffectKind::kDeadZone, {width}});
-  StartExperiment(*p.transport, 201, "diagnose:T=100,f1=0.5,amp=1.5,seed=3", 5.0, 200.0);
+  StartExperiment(p, 201, "diagnose:T=100,f1=0.5,amp=1.5,seed=3", 5.0, 200.0);
   Catalog reader(p.catalog_path);
   auto experiment_done = [&] {
     for (const auto& e : reader.Experiments("rig-t"))
@@ -230,7 +265,7 @@ TEST(Pipeline, GapDiagnosisJobFindsTheRigsEffect) {
   };
   ASSERT_TRUE(p.RunUntil(experiment_done, 20.0)) << "the experiment did not finish";
   const nlohmann::json options = {{"sim", ModelToJson(Plant())}};
-  RequestModel(*p.transport, 9201, 201, "gap-diagnose", options.dump());
+  RequestModel(p, 9201, 201, "gap-diagnose", options.dump());
   ASSERT_TRUE(p.RunUntil([&] { return reader.ModelForRequest(9201).has_value(); }, 30.0))
       << "no diagnosis stored";
   const ModelRecord m = *reader.ModelForRequest(9201);
@@ -254,7 +289,7 @@ TEST(Pipeline, BadRequestsFailWithAMessage) {
   Pipeline p(MakeLcmTransport("memq://"), "bad_requests");
   Catalog reader(p.catalog_path);
   // An over-limit signal (amp 3 > max_abs 2) is refused before anything moves.
-  StartExperiment(*p.transport, 201, "step:amp=3", 5.0, 10.0);
+  StartExperiment(p, 201, "step:amp=3", 5.0, 10.0);
   auto refused = [&] {
     for (const auto& e : reader.Experiments("rig-t"))
       if (e.experiment_id == 201 && e.state == "failed") return true;
@@ -263,23 +298,26 @@ TEST(Pipeline, BadRequestsFailWithAMessage) {
   ASSERT_TRUE(p.RunUntil(refused, 5.0));
   EXPECT_FALSE(p.rig->running());
   // A good experiment, then a job with an unknown method: the job fails, naming the methods.
-  StartExperiment(*p.transport, 202, "prbs:bits=6,amp=1", 5.0, 12.6);
+  StartExperiment(p, 202, "prbs:bits=6,amp=1", 5.0, 12.6);
   auto done = [&] {
     for (const auto& e : reader.Experiments("rig-t"))
       if (e.experiment_id == 202 && e.state == "done") return true;
     return false;
   };
   ASSERT_TRUE(p.RunUntil(done, 10.0));
-  RequestModel(*p.transport, 9100, 202, "no-such-method", "{}");
-  ASSERT_TRUE(p.RunUntil(
-      [&] {
-        auto j = reader.Job(9100);
-        return j && j->state == "failed";
-      },
-      10.0));
-  EXPECT_NE(reader.Job(9100)->message.find("unknown method 'no-such-method'"), std::string::npos)
-      << reader.Job(9100)->message;
-  EXPECT_NE(reader.Job(9100)->message.find("arx-oe"), std::string::npos);
+  // A job with an unknown method is refused at once by the catalogue, naming the methods.
+  RequestModel(p, 9100, 202, "no-such-method", "{}");
+  ASSERT_TRUE(p.replies.count(9100));
+  EXPECT_EQ(p.replies[9100].state, request_reply_t::STATE_REFUSED);
+  EXPECT_NE(p.replies[9100].message.find("unknown method 'no-such-method'"), std::string::npos)
+      << p.replies[9100].message;
+  EXPECT_NE(p.replies[9100].message.find("arx-oe"), std::string::npos);
+  EXPECT_FALSE(reader.Job(9100).has_value());
+  // So are an experiment nobody ran and options that are not a JSON object.
+  RequestModel(p, 9101, 999, "arx", "{}");
+  EXPECT_NE(p.replies[9101].message.find("unknown to the catalogue"), std::string::npos);
+  RequestModel(p, 9102, 202, "arx", "[1,2]");
+  EXPECT_NE(p.replies[9102].message.find("JSON object"), std::string::npos);
   EXPECT_EQ(reader.CountModels(), 0);
 }
 

@@ -25,76 +25,19 @@
 #include "core/transport/channels.h"
 #include "core/transport/signing.h"
 #include "core/transport/transport.h"
+#include "tests/integration/process_harness.h"
 
 namespace idrig {
 namespace {
 
-bool g_netns_ready = false;
-
-class NetnsEnvironment : public ::testing::Environment {
- public:
-  void SetUp() override {
-    if (geteuid() != 0) return;
-    if (unshare(CLONE_NEWNET) != 0) return;
-    g_netns_ready =
-        std::system("ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo") == 0;
-  }
-};
+using namespace harness;
 const auto* const kEnvironment = ::testing::AddGlobalTestEnvironment(new NetnsEnvironment);
 
 const std::string kUrl = PrivateUdpmUrl(7711, 0);
 
-struct Child {
-  pid_t pid = -1;
-  ~Child() { Kill(SIGKILL); }
-  void Kill(int signal) {
-    if (pid <= 0) return;
-    kill(pid, signal);
-    int status = 0;
-    waitpid(pid, &status, 0);
-    pid = -1;
-  }
-};
-
-std::string Dir(const std::string& name) {
-  const std::string dir = ::testing::TempDir() + "/" + name + "_" + std::to_string(getpid());
-  std::system(("rm -rf '" + dir + "'").c_str());
-  mkdir(dir.c_str(), 0755);
-  return dir;
-}
-
 void Start(Child* child, const std::string& program, std::vector<std::string> args,
            const std::string& log) {
-  args.insert(args.begin(), std::string(IDRIG_BIN_DIR) + "/" + program);
-  args.push_back("--url");
-  args.push_back(kUrl);
-  std::vector<char*> argv;
-  for (auto& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
-    dup2(fd, 1);
-    dup2(fd, 2);
-    execv(argv[0], argv.data());
-    _exit(127);
-  }
-  child->pid = pid;
-}
-
-void WriteFile(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  out << text;
-}
-
-template <class Predicate>
-bool Until(Transport& t, Predicate done, double seconds) {
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
-  while (std::chrono::steady_clock::now() < end) {
-    t.Handle(10);
-    if (done()) return true;
-  }
-  return false;
+  harness::Start(child, program, std::move(args), log, kUrl);
 }
 
 model_result_t Result(int64_t request_id) {
@@ -126,28 +69,53 @@ model_result_t Result(int64_t request_id) {
 }
 
 TEST(Processes, CatalogKilledDuringABurstKeepsEveryAcknowledgedResultOnce) {
-  if (!g_netns_ready) GTEST_SKIP() << "needs root for a private network namespace";
+  if (!NetnsReady()) GTEST_SKIP() << "needs root for a private network namespace";
   const std::string dir = Dir("catalog_kill");
   const std::string db = dir + "/catalog.db";
+  const Keys keys(dir);
+  nlohmann::json config = keys.Roles();
+  config["db_path"] = db;
+  config["lease_s"] = 600.0;
+  WriteFile(dir + "/catalog.json", config.dump());
+  const int64_t kResults = 300;
+  {
+    // The jobs, leased to the worker "burst" (the catalogue stores results only from the
+    // worker holding a job's lease).
+    Catalog setup(db);
+    for (int64_t id = 1; id <= kResults; ++id) {
+      JobRecord job;
+      job.request_id = id;
+      job.rig_id = "rig-k";
+      job.experiment_id = 1;
+      job.method = "arx";
+      job.options_json = "{}";
+      job.created_utime = NowMicros();
+      setup.AddJob(job);
+      setup.Claim(id, "burst", NowMicros(), 600000000, &job);
+    }
+  }
+  EnvelopeSigner worker(kServiceRole, keys.Service(), "burst");
+  KeyRing ring;
+  ring.keys[kServiceRole] = keys.Service();
+  EnvelopeVerifier verifier(ring, "", 300, "test");
   auto t = MakeLcmTransport(kUrl);
   std::set<int64_t> acked;
   bool catalog_up = false;
   t->Subscribe(
       "IDRIG/rig-k/ACK",
-      [&](const std::string&, const uint8_t* d, size_t n) {
+      [&](const std::string& c, const uint8_t* d, size_t n) {
         result_ack_t a;
-        if (Decode(d, n, &a, nullptr)) acked.insert(a.request_id);
+        if (verifier.Open(c, d, n, {kServiceRole}, &a, nullptr, nullptr)) acked.insert(a.request_id);
       },
       10000);
   t->Subscribe("IDRIG/STATUS/catalog",
                [&](const std::string&, const uint8_t*, size_t) { catalog_up = true; });
   Child catalog;
-  Start(&catalog, "idrig-catalog", {"--db", db}, dir + "/catalog.log");
+  Start(&catalog, "idrig-catalog", {"--config", dir + "/catalog.json"}, dir + "/catalog.log");
   ASSERT_TRUE(Until(
       *t, [&] { return catalog_up; }, 10.0))
       << "idrig-catalog did not start";
 
-  const int64_t kResults = 300;
   std::set<int64_t> acked_before_kill;
   bool killed = false, restarted = false;
   auto killed_at = std::chrono::steady_clock::now();
@@ -158,7 +126,7 @@ TEST(Processes, CatalogKilledDuringABurstKeepsEveryAcknowledgedResultOnce) {
     int sent = 0;
     for (int64_t id = 1; id <= kResults; ++id) {
       if (acked.count(id)) continue;
-      t->PublishMessage("IDRIG/rig-k/RESULT", Result(id));
+      worker.Publish(*t, "IDRIG/rig-k/RESULT", Result(id));
       if (++sent % 10 == 0) t->Handle(0);
     }
     if (!killed) {
@@ -184,7 +152,7 @@ TEST(Processes, CatalogKilledDuringABurstKeepsEveryAcknowledgedResultOnce) {
         *t, [] { return false; }, 0.2);
     if (killed && !restarted &&
         std::chrono::steady_clock::now() - killed_at > std::chrono::milliseconds(300)) {
-      Start(&catalog, "idrig-catalog", {"--db", db}, dir + "/catalog.log");
+      Start(&catalog, "idrig-catalog", {"--config", dir + "/catalog.json"}, dir + "/catalog.log");
       restarted = true;
     }
   }
@@ -200,14 +168,13 @@ TEST(Processes, CatalogKilledDuringABurstKeepsEveryAcknowledgedResultOnce) {
 }
 
 TEST(Processes, WorkerKilledMidJobAnotherWorkerCompletesIt) {
-  if (!g_netns_ready) GTEST_SKIP() << "needs root for a private network namespace";
+  if (!NetnsReady()) GTEST_SKIP() << "needs root for a private network namespace";
   const std::string dir = Dir("worker_kill");
-  const std::string key = dir + "/hmac.key";
-  WriteNewKeyFile(key);
-  WriteFile(
-      dir + "/catalog.json",
-      nlohmann::json({{"db_path", dir + "/catalog.db"}, {"lease_s", 1.0}, {"offer_period_s", 0.3}})
-          .dump());
+  const Keys keys(dir);
+  const std::string key = keys.command;
+  nlohmann::json catalog_config = keys.Roles();
+  catalog_config.update({{"db_path", dir + "/catalog.db"}, {"lease_s", 1.0}, {"offer_period_s", 0.3}});
+  WriteFile(dir + "/catalog.json", catalog_config.dump());
   WriteFile(dir + "/rig.json", nlohmann::json({{"rig_id", "rig-k"},
                                                {"noise_std", 0.001},
                                                {"key_file", key},
@@ -219,8 +186,16 @@ TEST(Processes, WorkerKilledMidJobAnotherWorkerCompletesIt) {
                                                  {"num", {1.0}},
                                                  {"den", {1.0, 1.2, 1.0}}}}})
                                    .dump());
-  WriteFile(dir + "/excite.json", nlohmann::json({{"rig_id", "rig-k"}, {"key_file", key}}).dump());
-  WriteFile(dir + "/worker.json", nlohmann::json({{"renew_s", 0.25}}).dump());
+  WriteFile(dir + "/excite.json",
+            nlohmann::json({{"rig_id", "rig-k"}, {"key_file", key}, {"operator_key_file", keys.operator_key}})
+                .dump());
+  nlohmann::json worker_config = keys.Roles();
+  worker_config["renew_s"] = 0.25;
+  WriteFile(dir + "/worker.json", worker_config.dump());
+  EnvelopeSigner operator_signer(kOperatorRole, keys.Operator(), "cli:test");
+  KeyRing ring;
+  ring.keys[kServiceRole] = keys.Service();
+  EnvelopeVerifier verifier(ring, "", 300, "test");
   Child catalog, logger, rig, excite, worker1, worker2;
   Start(&catalog, "idrig-catalog", {"--config", dir + "/catalog.json"}, dir + "/catalog.log");
   Start(&logger, "idrig-logger", {"--db", dir + "/experiments.db"}, dir + "/logger.log");
@@ -241,9 +216,9 @@ TEST(Processes, WorkerKilledMidJobAnotherWorkerCompletesIt) {
     experiment_status_t s;
     if (Decode(d, n, &s, nullptr) && s.source == "rig" && s.experiment_id == 5) rig_status = s;
   });
-  t->Subscribe("IDRIG/rig-k/ACK", [&](const std::string&, const uint8_t* d, size_t n) {
+  t->Subscribe("IDRIG/rig-k/ACK", [&](const std::string& c, const uint8_t* d, size_t n) {
     result_ack_t a;
-    if (Decode(d, n, &a, nullptr) && a.request_id == 4242) ack = a;
+    if (verifier.Open(c, d, n, {kServiceRole}, &a, nullptr, nullptr) && a.request_id == 4242) ack = a;
   });
   ASSERT_TRUE(Until(
       *t, [&] { return services.size() == 5; }, 10.0))
@@ -259,7 +234,7 @@ TEST(Processes, WorkerKilledMidJobAnotherWorkerCompletesIt) {
   request.sample_rate_hz = 10;
   request.duration_s = 25.4;
   request.speed = 50;
-  t->PublishMessage("IDRIG/rig-k/EXP_REQ", request);
+  operator_signer.Publish(*t, "IDRIG/rig-k/EXP_REQ", request);
   ASSERT_TRUE(Until(
       *t, [&] { return rig_status.state == experiment_status_t::STATE_DONE; }, 10.0));
 
@@ -270,7 +245,7 @@ TEST(Processes, WorkerKilledMidJobAnotherWorkerCompletesIt) {
   job.experiment_id = 5;
   job.method = "arx-oe";
   job.options_json = "{\"order\":2}";
-  t->PublishMessage("IDRIG/rig-k/IDENT_REQ", job);
+  operator_signer.Publish(*t, "IDRIG/rig-k/IDENT_REQ", job);
   // Wait until w1 holds the lease (it then computes, plus a 4 s delay), then kill it.
   Catalog reader(dir + "/catalog.db");
   ASSERT_TRUE(Until(

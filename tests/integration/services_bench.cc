@@ -28,6 +28,7 @@
 #include "core/catalog/catalog.h"
 #include "core/catalog/experiment_store.h"
 #include "core/transport/channels.h"
+#include "core/transport/auth.h"
 #include "core/transport/signing.h"
 #include "core/transport/transport.h"
 
@@ -152,6 +153,12 @@ struct Cluster {
           int excite_block) {
     dir = Dir(name);
     WriteNewKeyFile(dir + "/hmac.key");
+    WriteNewKeyFile(dir + "/operator.key");
+    WriteNewKeyFile(dir + "/service.key");
+    const std::string keys = "\"operator_key_file\":\"" + dir + "/operator.key\",\"service_key_file\":\"" +
+                             dir + "/service.key\"";
+    std::ofstream(dir + "/catalog.json") << "{\"db_path\":\"" << dir << "/catalog.db\"," << keys << "}";
+    std::ofstream(dir + "/worker.json") << "{" << keys << "}";
     std::ofstream(dir + "/plant.json")
         << R"({"format":"idrig.model/1","kind":"tf","domain":"continuous","Ts":0,"num":[0.5,1],"den":[1,2.5,4,1.5]})";
     std::ofstream(dir + "/rig.json")
@@ -160,8 +167,8 @@ struct Cluster {
         << "/hmac.key\",\"block_samples\":" << rig_block << ",\"max_abs\":5}";
     std::ofstream(dir + "/excite.json") << "{\"rig_id\":\"bench\",\"key_file\":\"" << dir
                                         << "/hmac.key\",\"block_samples\":" << excite_block
-                                        << ",\"max_abs\":5,\"max_speed\":100000}";
-    pids.push_back(Start({bin + "/idrig-catalog", "--db", dir + "/catalog.db", "--url", kUrl},
+                                        << ",\"max_abs\":5,\"max_speed\":100000," << keys << "}";
+    pids.push_back(Start({bin + "/idrig-catalog", "--config", dir + "/catalog.json", "--url", kUrl},
                          dir + "/catalog.log"));
     pids.push_back(Start({bin + "/idrig-logger", "--db", dir + "/experiments.db", "--url", kUrl},
                          dir + "/logger.log"));
@@ -170,7 +177,8 @@ struct Cluster {
     pids.push_back(Start({bin + "/idrig-excite", "--config", dir + "/excite.json", "--url", kUrl},
                          dir + "/excite.log"));
     for (int w = 0; w < workers; ++w)
-      pids.push_back(Start({bin + "/idrig-worker", "--id", "bw" + std::to_string(w), "--url", kUrl},
+      pids.push_back(Start({bin + "/idrig-worker", "--config", dir + "/worker.json", "--id",
+                            "bw" + std::to_string(w), "--url", kUrl},
                            dir + "/w.log"));
   }
   ~Cluster() {
@@ -180,11 +188,18 @@ struct Cluster {
 
 struct Client {
   std::unique_ptr<Transport> t = MakeLcmTransport(kUrl);
+  KeyRing keys;
+  std::unique_ptr<EnvelopeSigner> signer;
+  std::unique_ptr<EnvelopeVerifier> verifier;
   std::set<std::string> services;
   experiment_status_t rig{};
   std::map<int64_t, int64_t> acks;  // request id -> receive time [µs]
   std::map<int64_t, result_ack_t> ack_messages;
-  Client() {
+  explicit Client(const std::string& dir) {
+    keys.keys[kOperatorRole] = ReadKeyFile(dir + "/operator.key");
+    keys.keys[kServiceRole] = ReadKeyFile(dir + "/service.key");
+    signer = std::make_unique<EnvelopeSigner>(kOperatorRole, keys.keys[kOperatorRole], "bench");
+    verifier = std::make_unique<EnvelopeVerifier>(keys, "", 300, "bench");
     t->Subscribe("IDRIG/STATUS/.*", [&](const std::string&, const uint8_t* d, size_t n) {
       service_status_t s;
       if (Decode(d, n, &s, nullptr)) services.insert(s.instance_id);
@@ -195,9 +210,10 @@ struct Client {
     });
     t->Subscribe(
         "IDRIG/bench/ACK",
-        [&](const std::string&, const uint8_t* d, size_t n) {
+        [&](const std::string& channel, const uint8_t* d, size_t n) {
           result_ack_t a;
-          if (Decode(d, n, &a, nullptr) && !acks.count(a.request_id)) {
+          if (verifier->Open(channel, d, n, {kServiceRole}, &a, nullptr, nullptr) &&
+              !acks.count(a.request_id)) {
             acks[a.request_id] = NowMicros();
             ack_messages[a.request_id] = a;
           }
@@ -215,7 +231,7 @@ struct Client {
     r.sample_rate_hz = fs;
     r.duration_s = duration;
     r.speed = speed;
-    t->PublishMessage("IDRIG/bench/EXP_REQ", r);
+    signer->Publish(*t, "IDRIG/bench/EXP_REQ", r);
   }
   void Identify(int64_t request_id, int64_t experiment, const std::string& method,
                 const std::string& options) {
@@ -226,13 +242,13 @@ struct Client {
     r.experiment_id = experiment;
     r.method = method;
     r.options_json = options;
-    t->PublishMessage("IDRIG/bench/IDENT_REQ", r);
+    signer->Publish(*t, "IDRIG/bench/IDENT_REQ", r);
   }
 };
 
 int Latency(const std::string& bin, int64_t samples) {
   Cluster cluster(bin, "latency", 1, 1000, 500);
-  Client c;
+  Client c(cluster.dir);
   if (!Until(
           *c.t, [&] { return c.services.size() >= 5; }, 10))
     return 1;
@@ -280,7 +296,7 @@ int Jobs(const std::string& bin, int workers, int jobs, bool heavy) {
   const double fs = heavy ? 100.0 : 10.0;
   const std::string method = heavy ? "arx-oe" : "arx";
   Cluster cluster(bin, "jobs" + std::to_string(workers), workers, 100, 50);
-  Client c;
+  Client c(cluster.dir);
   if (!Until(
           *c.t, [&] { return static_cast<int>(c.services.size()) >= 4 + workers; }, 10))
     return 1;

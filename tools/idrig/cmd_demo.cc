@@ -92,15 +92,30 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
   mkdir(dir.c_str(), 0755);
   mkdir((dir + "/logs").c_str(), 0755);
   const std::string rig = "sim1";
-  const std::string key_file = dir + "/hmac.key";
-  if (access(key_file.c_str(), R_OK) != 0) WriteNewKeyFile(key_file);
+  // Three deployment keys (docs/services.md, "Authentication"): commands (excite -> rig), the
+  // operator's (requests from the command line), the services' (claims, results, acks).
+  const std::string key_file = dir + "/hmac.key", operator_key = dir + "/operator.key",
+                    service_key = dir + "/service.key";
+  for (const std::string& k : {key_file, operator_key, service_key}) {
+    try {
+      ReadKeyFile(k);
+    } catch (const std::invalid_argument&) {
+      WriteNewKeyFile(k);  // missing (or weak, or readable by others): a new one
+    }
+  }
+  const std::string state = dir + "/state";
+  mkdir(state.c_str(), 0700);
   // The simulated rig: seed 001's plant W(p) = (0.5p + 1)/(p^3 + 2.5p^2 + 4p + 1.5) + noise.
   TransferFunction plant;
   plant.num = Eigen::Vector2d(0.5, 1.0);
   plant.den = Eigen::Vector4d(1.0, 2.5, 4.0, 1.5);
   WriteModelFile(plant, dir + "/plant.json");
-  WriteJson(dir + "/catalog.json",
-            {{"db_path", dir + "/catalog.db"}, {"lease_s", 3.0}, {"offer_period_s", 0.5}});
+  WriteJson(dir + "/catalog.json", {{"db_path", dir + "/catalog.db"},
+                                    {"lease_s", 3.0},
+                                    {"offer_period_s", 0.5},
+                                    {"operator_key_file", operator_key},
+                                    {"service_key_file", service_key},
+                                    {"state_dir", state}});
   WriteJson(dir + "/logger.json", {{"db_path", dir + "/experiments.db"}});
   WriteJson(dir + "/rig_sim.json", {{"rig_id", rig},
                                     {"model_file", dir + "/plant.json"},
@@ -111,14 +126,21 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
                                     {"watchdog_s", 2.0},
                                     {"block_samples", 100},
                                     {"key_file", key_file},
-                                    {"key_id", 1}});
+                                    {"key_id", 1},
+                                    {"state_dir", state + "/rig"}});
   WriteJson(dir + "/excite.json", {{"rig_id", rig},
                                    {"key_file", key_file},
                                    {"key_id", 1},
+                                   {"operator_key_file", operator_key},
+                                   {"state_dir", state},
                                    {"block_samples", 20},
                                    {"max_abs", 5.0},
                                    {"max_rate", 2000.0}});
-  WriteJson(dir + "/worker.json", {{"renew_s", 0.5}, {"replay_retry_s", 0.3}});
+  WriteJson(dir + "/worker.json", {{"renew_s", 0.5},
+                                   {"replay_retry_s", 0.3},
+                                   {"operator_key_file", operator_key},
+                                   {"service_key_file", service_key},
+                                   {"state_dir", state}});
 
   const std::string bin = ExecutableDir();
   std::vector<ChildProcess> children;
@@ -143,7 +165,7 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
     }
   } cleanup{children};
 
-  ServiceClient client(url);
+  ServiceClient client(url, operator_key);
   const size_t expected = 4 + static_cast<size_t>(workers);
   for (int i = 0; i < 100 && client.services().size() < expected; ++i) {
     client.Spin(100);
@@ -171,9 +193,11 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
   std::cout << "[2/4] experiments on rig " << rig << " (simulated time x" << speed << "):\n";
   for (auto& e : experiments) {
     e.id = NewId();
-    const int64_t request_id =
-        client.StartExperiment(rig, e.id, e.spec, e.fs, e.duration, speed, 0.0);
-    auto last_request = std::chrono::steady_clock::now();
+    const int64_t request_id = NewId();
+    client.AwaitReply(
+        request_id, "excite", "idrig-excite of rig " + rig,
+        [&] { client.StartExperiment(rig, e.id, e.spec, e.fs, e.duration, speed, 0.0, request_id); },
+        10.0, {request_reply_t::STATE_ACCEPTED});
     const auto deadline =
         std::chrono::steady_clock::now() + std::chrono::duration<double>(e.duration / speed + 20.0);
     int last_percent = -1;
@@ -183,11 +207,6 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
       const auto* rs = client.ExperimentStatus(rig, e.id, "rig");
       if (ex && ex->state == experiment_status_t::STATE_FAILED)
         throw std::runtime_error("experiment refused: " + ex->message);
-      if (!ex && std::chrono::steady_clock::now() - last_request > std::chrono::seconds(1)) {
-        // Not heard of yet (request lost?): the same request again (idempotent by request id).
-        client.StartExperiment(rig, e.id, e.spec, e.fs, e.duration, speed, 0.0, request_id);
-        last_request = std::chrono::steady_clock::now();
-      }
       const int64_t total = ex ? ex->samples_total : 0;
       const int64_t done = rs ? rs->samples_done : 0;
       const int percent = total > 0 ? static_cast<int>(100 * done / total) : 0;
@@ -235,25 +254,32 @@ void RunDemo(const std::string& dir, int port, double speed, int workers, bool a
   const auto start = std::chrono::steady_clock::now();
   auto last_send = start - std::chrono::seconds(10);
   std::set<int64_t> reported;
+  auto finished = [&](int64_t request_id) {
+    const request_reply_t* r = client.Reply(request_id, "catalog");
+    return r && (r->state == request_reply_t::STATE_DONE || r->state == request_reply_t::STATE_FAILED ||
+                 r->state == request_reply_t::STATE_REFUSED);
+  };
   while (reported.size() < jobs.size()) {
-    if (std::chrono::steady_clock::now() - last_send > std::chrono::seconds(2)) {
-      for (const auto& j : jobs)  // idempotent by request id: re-sent until acknowledged
-        if (!client.acks().count(j.request_id))
+    if (std::chrono::steady_clock::now() - last_send > std::chrono::seconds(1)) {
+      // Idempotent by request id: re-sent until the catalogue says the job has ended (its
+      // answer to a repeated request is the job's state).
+      for (const auto& j : jobs)
+        if (!finished(j.request_id))
           client.RequestIdentify(rig, j.request_id, j.experiment_id, j.method, j.options);
       last_send = std::chrono::steady_clock::now();
     }
     client.Spin(100);
     for (const auto& j : jobs) {
-      auto ack = client.acks().find(j.request_id);
-      if (ack == client.acks().end() || reported.count(j.request_id)) continue;
+      if (!finished(j.request_id) || reported.count(j.request_id)) continue;
+      const request_reply_t& r = *client.Reply(j.request_id, "catalog");
       reported.insert(j.request_id);
       const double t =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       std::cout << "  " << std::setw(9) << std::left << j.label << " " << std::setw(17) << j.method
-                << (ack->second.model_id > 0
-                        ? "stored as model " + std::to_string(ack->second.model_id)
-                        : std::string("FAILED (see idrig models list)"))
-                << " by " << ack->second.worker_id << " after " << Number(t, 3) << " s\n";
+                << (r.state == request_reply_t::STATE_DONE
+                        ? "stored as model " + std::to_string(r.model_id) + " (" + r.message + ")"
+                        : std::string("FAILED: ") + r.message)
+                << " after " << Number(t, 3) << " s\n";
     }
     if (std::chrono::steady_clock::now() - start > std::chrono::seconds(90))
       throw std::runtime_error("identification did not finish; see " + dir + "/logs");

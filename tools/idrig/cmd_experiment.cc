@@ -20,8 +20,8 @@ void RegisterExperimentCommands(CLI::App& app) {
     auto* group = app.add_subcommand("experiment", "start, watch or stop experiments on a rig");
     group->require_subcommand(1);
     struct Args {
-      std::string url = DefaultLcmUrl(), rig = "sim1", signal;
-      double fs = 10, duration = 10, speed = 1, max_abs = 0, seconds = 1.5;
+      std::string url = DefaultLcmUrl(), rig = "sim1", signal, key_file;
+      double fs = 10, duration = 10, speed = 1, max_abs = 0, seconds = 1.5, timeout = 5.0;
       int64_t experiment = 0;
       bool wait = false;
     };
@@ -35,6 +35,11 @@ void RegisterExperimentCommands(CLI::App& app) {
     for (auto* c : {start, status, stop}) {
       c->add_option("--url", args->url, "LCM URL (default $LCM_DEFAULT_URL or udpm ttl=0)");
       c->add_option("--rig", args->rig, "rig id");
+    }
+    for (auto* c : {start, stop}) {
+      c->add_option("--key-file", args->key_file, "operator key (default $IDRIG_KEY_FILE)");
+      c->add_option("--timeout", args->timeout, "seconds to wait for idrig-excite's answer")
+          ->check(CLI::PositiveNumber);
     }
     start->add_option("--signal", args->signal, "excitation SPEC (docs/excitation.md)")->required();
     start->add_option("--fs", args->fs, "sample rate [Hz]")->check(CLI::PositiveNumber);
@@ -51,34 +56,43 @@ void RegisterExperimentCommands(CLI::App& app) {
     stop->add_option("--experiment", args->experiment, "experiment id")->required();
     start->callback([args] {
       ValidateRigId(args->rig);
-      ServiceClient client(args->url);
+      ServiceClient client(args->url, OperatorKeyPath(args->key_file));
       const int64_t id = args->experiment > 0 ? args->experiment : NewId();
-      const int64_t request_id = client.StartExperiment(args->rig, id, args->signal, args->fs,
-                                                        args->duration, args->speed, args->max_abs);
+      const int64_t request_id = NewId();
+      // Re-sent until idrig-excite answers: accepted, or refused with the reason (a limit).
+      const request_reply_t& reply = client.AwaitReply(
+          request_id, "excite", "idrig-excite of rig " + args->rig,
+          [&] {
+            client.StartExperiment(args->rig, id, args->signal, args->fs, args->duration,
+                                   args->speed, args->max_abs, request_id);
+          },
+          args->timeout, {request_reply_t::STATE_ACCEPTED});
       std::cout << id << "\n" << std::flush;
+      std::cerr << "experiment " << id << " accepted: " << reply.message << "\n";
       if (!args->wait) return;
-      for (int i = 0; i < 100000; ++i) {
+      for (int polls = 0;;) {
         client.Spin(200);
         const auto* ex = client.ExperimentStatus(args->rig, id, "excite");
-        if (!ex && i % 5 == 4)  // not heard of yet: the same request again (idempotent)
-          client.StartExperiment(args->rig, id, args->signal, args->fs, args->duration, args->speed,
-                                 args->max_abs, request_id);
         const auto* rs = client.ExperimentStatus(args->rig, id, "rig");
-        if (ex && ex->state == experiment_status_t::STATE_FAILED)
-          throw std::invalid_argument("experiment refused: " + ex->message);
-        if (rs && rs->state >= experiment_status_t::STATE_DONE) {
-          std::cerr << "experiment " << id << " " << ExperimentStateName(rs->state) << ": "
-                    << rs->samples_total << " samples, " << rs->blocks_total << " blocks "
-                    << rs->message << "\n";
-          if (rs->state != experiment_status_t::STATE_DONE)
-            throw std::runtime_error("experiment did not complete");
-          return;
+        const experiment_status_t* end =
+            rs && rs->state >= experiment_status_t::STATE_DONE ? rs
+            : ex && ex->state >= experiment_status_t::STATE_STOPPED ? ex
+                                                                    : nullptr;
+        if (!end) {
+          if (rs && ++polls % 25 == 0)  // progress every 5 s
+            std::cerr << "  experiment " << id << ": " << rs->samples_done << "/" << rs->samples_total
+                      << " samples (" << (rs->samples_total ? 100 * rs->samples_done / rs->samples_total : 0)
+                      << " %)\n";
+          continue;
         }
-        if (i == 0 && !ex) std::cerr << "waiting for idrig-excite on rig " << args->rig << "…\n";
-        if (i % 25 == 24 && rs)  // progress every 5 s
-          std::cerr << "  experiment " << id << ": " << rs->samples_done << "/" << rs->samples_total
-                    << " samples (" << (rs->samples_total ? 100 * rs->samples_done / rs->samples_total : 0)
-                    << " %)\n";
+        std::cerr << "experiment " << id << " " << ExperimentStateName(end->state) << ": "
+                  << end->samples_total << " samples"
+                  << (end == rs ? ", " + std::to_string(rs->blocks_total) + " blocks" : "") << " "
+                  << end->message << "\n";
+        if (end->state != experiment_status_t::STATE_DONE)
+          throw CommandFailure("experiment " + std::to_string(id) + " " +
+                               ExperimentStateName(end->state) + ": " + end->message);
+        return;
       }
     });
     status->callback([args] {
@@ -147,9 +161,14 @@ void RegisterExperimentCommands(CLI::App& app) {
                 << " samples at Ts " << r.sample_time << " s to " << store_args->out << "\n";
     });
     stop->callback([args] {
-      ServiceClient client(args->url);
-      client.StopExperiment(args->rig, args->experiment);
-      client.Spin(200);
+      ValidateRigId(args->rig);
+      ServiceClient client(args->url, OperatorKeyPath(args->key_file));
+      const int64_t request_id = NewId();
+      const request_reply_t& reply = client.AwaitReply(
+          request_id, "excite", "idrig-excite of rig " + args->rig,
+          [&] { client.StopExperiment(args->rig, args->experiment, request_id); }, args->timeout,
+          {request_reply_t::STATE_ACCEPTED});
+      std::cerr << "experiment " << args->experiment << ": " << reply.message << "\n";
     });
   }
 }

@@ -67,7 +67,8 @@ void RegisterIdentifyCommand(CLI::App& app) {
   cmd->add_option("--y", args->y_names, ".mat files: the output variable(s), comma-separated");
   cmd->add_option("--ts", args->ts, ".mat files: sample time [s] (default: the file's Ts, or its time vector t)");
   cmd->add_option("--method", args->method, methods_help + "\n(default: auto)");
-  cmd->add_option("--order", args->order, "model order (0 or absent: chosen automatically)");
+  cmd->add_option("--order", args->order, "model order (0 or absent: chosen automatically)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--option", args->options, "method option key=value (value is JSON or a word); repeatable");
   cmd->add_option("--options-json", args->options_json, "method options as one JSON object");
   CLI::Option* frequencies = cmd->add_option("--frequencies", args->frequencies,
@@ -75,8 +76,12 @@ void RegisterIdentifyCommand(CLI::App& app) {
                   "the same as --option \"frequencies=[w1,w2,...]\"");
   cmd->add_flag("--json", args->json, "print the model as idrig.model/1 JSON (with an \"identification\" report)");
   cmd->callback([args, frequencies] {
-    nlohmann::json options = args->options_json.empty() ? nlohmann::json::object()
-                                                        : nlohmann::json::parse(args->options_json);
+    nlohmann::json options = args->options_json.empty()
+                                 ? nlohmann::json::object()
+                                 : nlohmann::json::parse(args->options_json, nullptr, false);
+    if (!options.is_object())
+      throw std::invalid_argument("--options-json must be a JSON object, got '" +
+                                  args->options_json + "'");
     if (args->order > 0) options["order"] = args->order;
     for (const auto& kv : args->options) {
       const auto eq = kv.find('=');

@@ -16,6 +16,7 @@
 #include "core/io/mat_io.h"
 #include "core/io/model_json.h"
 #include "core/io/svg_plot.h"
+#include "core/methods/registry.h"
 #include "core/transport/channels.h"
 #include "tools/idrig/catalog_views.h"
 #include "tools/idrig/commands.h"
@@ -186,7 +187,8 @@ void RegisterModelsCommands(CLI::App& app) {
     group->require_subcommand(1);
     struct Args {
       std::string db = "idrig-demo/catalog.db", rig, method, param = "wn_1", url = DefaultLcmUrl(),
-                  options = "{}";
+                  options = "{}", key_file;
+      double timeout = 10.0, wait_timeout = 300.0;
       int64_t id = 0, experiment = 0;
       bool json = false, wait = false;
     };
@@ -216,7 +218,14 @@ void RegisterModelsCommands(CLI::App& app) {
     request->add_option("--method", args->method, "method name (idrig identify --help)")
         ->required();
     request->add_option("--options", args->options, "method options as a JSON object");
-    request->add_flag("--wait", args->wait, "wait for the catalogue's acknowledgement");
+    request->add_flag("--wait", args->wait,
+                      "wait until the model is stored (exit 1 with the job's error if it fails)");
+    request->add_option("--key-file", args->key_file, "operator key (default $IDRIG_KEY_FILE)");
+    request->add_option("--timeout", args->timeout,
+                        "seconds to re-send the request until the catalogue acknowledges it")
+        ->check(CLI::PositiveNumber);
+    request->add_option("--wait-timeout", args->wait_timeout, "seconds to wait with --wait")
+        ->check(CLI::PositiveNumber);
     list->add_option("--rig", args->rig, "only this rig");
     list->add_option("--method", args->method, "only this method");
     show->add_option("id", args->id, "model id")->required();
@@ -229,29 +238,27 @@ void RegisterModelsCommands(CLI::App& app) {
     history->add_option("--svg", *svg, "also write the plot as an SVG file");
     request->callback([args] {
       ValidateRigId(args->rig);
-      if (nlohmann::json::parse(args->options, nullptr, false).is_discarded())
+      FindMethod(args->method);  // an unknown method: std::invalid_argument listing them (exit 2)
+      if (!nlohmann::json::parse(args->options, nullptr, false).is_object())
         throw std::invalid_argument("--options must be a JSON object, got '" + args->options + "'");
-      ServiceClient client(args->url);
+      ServiceClient client(args->url, OperatorKeyPath(args->key_file));
       const int64_t id = NewId();
-      client.RequestIdentify(args->rig, id, args->experiment, args->method, args->options);
+      auto send = [&] {
+        client.RequestIdentify(args->rig, id, args->experiment, args->method, args->options);
+      };
+      // Re-sent until the catalogue has it as a job (or refuses it): no request is lost silently.
+      const request_reply_t& accepted = client.AwaitReply(
+          id, "catalog", "idrig-catalog", send, args->timeout,
+          {request_reply_t::STATE_ACCEPTED, request_reply_t::STATE_DONE, request_reply_t::STATE_FAILED});
       std::cout << id << "\n" << std::flush;
-      for (int i = 0; args->wait && i < 600; ++i) {
-        client.Spin(100);
-        auto ack = client.acks().find(id);
-        if (ack != client.acks().end()) {
-          std::cerr << (ack->second.model_id
-                            ? "stored as model " + std::to_string(ack->second.model_id)
-                            : std::string("failed (see the catalogue's jobs table)"))
-                    << "\n";
-          return;
-        }
-        if (i % 20 == 19)
-          client.RequestIdentify(args->rig, id, args->experiment, args->method, args->options);
-        if (i % 50 == 49)  // progress every 5 s
-          std::cerr << "  waiting for the catalogue's acknowledgement of request " << id << " ("
-                    << (i + 1) / 10 << " s of 60)\n";
-      }
-      if (args->wait) throw std::runtime_error("no acknowledgement within 60 s");
+      std::cerr << "request " << id << " acknowledged by the catalogue: " << accepted.message << "\n";
+      if (!args->wait) return;
+      const request_reply_t& end = client.AwaitReply(
+          id, "catalog", "idrig-catalog", send, args->wait_timeout,
+          {request_reply_t::STATE_DONE, request_reply_t::STATE_FAILED}, 2.0);
+      if (end.state == request_reply_t::STATE_FAILED)
+        throw CommandFailure("job " + std::to_string(id) + " failed: " + end.message);
+      std::cerr << "stored as model " << end.model_id << " (" << end.message << ")\n";
     });
     list->callback([args] {
       Catalog catalog(args->db, true);

@@ -1,6 +1,7 @@
 // `idrig status` (the services' periodic status) and `idrig spy` (lcm-spy with idrig's types).
 #include <unistd.h>
 
+#include <cstdlib>
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -60,10 +61,22 @@ void RegisterSpyCommand(CLI::App& app) {
       const std::string cp = "/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:" + jar;
       const std::string url_arg = "--lcm-url=" + *url;
       std::vector<std::string> a = {"java", "-cp", cp, "lcm.spy.Spy", url_arg};
+      // lcm-spy is a window: without a display, run it under xvfb-run when there is one, else
+      // say so in a sentence (not a Java stack trace).
+      const char* display = std::getenv("DISPLAY");
+      if (!display || !*display) {
+        if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
+          throw CommandFailure(
+              "idrig spy needs a display: DISPLAY is not set and xvfb-run is not installed "
+              "(apt-get install xvfb, or run it in a desktop session or with ssh -X); "
+              "`idrig status` shows the services without one");
+        std::cerr << "no DISPLAY: running lcm-spy under xvfb-run (an invisible screen)\n";
+        a.insert(a.begin(), {"xvfb-run", "-a"});
+      }
       std::vector<char*> argv;
       for (auto& s : a) argv.push_back(s.data());
       argv.push_back(nullptr);
-      execvp("java", argv.data());
+      execvp(a[0].c_str(), argv.data());
       throw std::runtime_error("cannot run java (install default-jre-headless)");
     });
   }

@@ -5,8 +5,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
+#include <iostream>
 #include <idrig/experiment_request_t.hpp>
 #include <idrig/identify_request_t.hpp>
 #include <stdexcept>
@@ -22,7 +24,35 @@ std::string DefaultLcmUrl() {
   return "udpm://239.255.76.67:7667?ttl=0";
 }
 
-ServiceClient::ServiceClient(const std::string& url) : transport_(MakeLcmTransport(url)) {
+std::string OperatorKeyPath(const std::string& flag_value) {
+  if (!flag_value.empty()) return flag_value;
+  const char* env = std::getenv("IDRIG_KEY_FILE");
+  return env && *env ? env : "";
+}
+
+ServiceClient::ServiceClient(const std::string& url, const std::string& key_file)
+    : transport_(MakeLcmTransport(url)) {
+  if (key_file.empty()) {
+    key_error_ = "this command changes state and needs the operator key: --key-file FILE or "
+                 "IDRIG_KEY_FILE=FILE (the demo's is idrig-demo/operator.key; make one with "
+                 "`openssl rand -hex 32 > FILE && chmod 600 FILE` and give it to idrig-excite "
+                 "and idrig-catalog as operator_key_file)";
+  } else {
+    KeyRing ring;
+    ring.keys[kOperatorRole] = ReadKeyFile(key_file);  // std::invalid_argument: exit 2
+    signer_.emplace(kOperatorRole, ring.keys[kOperatorRole], CliSenderId());
+    verifier_.emplace(ring, "", 300.0, "idrig");
+    transport_->Subscribe(
+        AnyRigChannel(ChannelKind::kRequestReply),
+        [this](const std::string& channel, const uint8_t* d, size_t n) {
+          request_reply_t r;
+          if (!verifier_->Open(channel, d, n, {kOperatorRole}, &r, nullptr, &transport_->counters()))
+            return;
+          auto& slot = replies_[{r.request_id, r.source}];
+          if (r.utime >= slot.utime) slot = r;
+        },
+        1000);
+  }
   transport_->Subscribe(
       AnyRigChannel(ChannelKind::kExperimentStatus),
       [this](const std::string&, const uint8_t* d, size_t n) {
@@ -40,14 +70,57 @@ ServiceClient::ServiceClient(const std::string& url) : transport_(MakeLcmTranspo
         services_[s.instance_id] = s;
       },
       1000);
-  transport_->Subscribe(
-      AnyRigChannel(ChannelKind::kAck),
-      [this](const std::string&, const uint8_t* d, size_t n) {
-        result_ack_t a;
-        if (!Decode(d, n, &a, &transport_->counters())) return;
-        acks_[a.request_id] = a;
-      },
-      1000);
+}
+
+EnvelopeSigner& ServiceClient::Signer() {
+  if (!signer_) throw CommandFailure(key_error_, 2);
+  return *signer_;
+}
+
+const request_reply_t* ServiceClient::Reply(int64_t request_id, const std::string& source) const {
+  auto it = replies_.find({request_id, source});
+  return it == replies_.end() ? nullptr : &it->second;
+}
+
+const request_reply_t& ServiceClient::AwaitReply(int64_t request_id, const std::string& source,
+                                                 const std::string& who,
+                                                 const std::function<void()>& send,
+                                                 double timeout_s, std::vector<int32_t> states,
+                                                 double resend_s) {
+  Signer();
+  states.push_back(request_reply_t::STATE_REFUSED);
+  const auto start = std::chrono::steady_clock::now();
+  auto last_send = start;
+  bool said = false;
+  send();
+  for (;;) {
+    Spin(100);
+    const request_reply_t* reply = Reply(request_id, source);
+    if (reply && std::find(states.begin(), states.end(), reply->state) != states.end()) {
+      if (reply->state == request_reply_t::STATE_REFUSED)
+        throw CommandFailure("request " + std::to_string(request_id) + " refused by " + who + ": " +
+                             reply->message);
+      return *reply;
+    }
+    const auto now = std::chrono::steady_clock::now();
+    const double waited = std::chrono::duration<double>(now - start).count();
+    if (waited > timeout_s)
+      throw CommandFailure(
+          "no answer from " + who + " to request " + std::to_string(request_id) + " within " +
+          std::to_string(static_cast<int>(timeout_s)) + " s" +
+          (reply ? " (last: " + reply->message + ")"
+                 : " (is it running, on this URL, with the same operator key?); nothing was "
+                   "queued"));
+    if (!said && waited > 1.0 && !reply) {
+      std::cerr << "waiting for " << who << " to acknowledge request " << request_id
+                << " (re-sending every " << resend_s << " s, up to " << timeout_s << " s)…\n";
+      said = true;
+    }
+    if (std::chrono::duration<double>(now - last_send).count() >= resend_s) {
+      send();  // idempotent by request id; a fresh signature each time
+      last_send = now;
+    }
+  }
 }
 
 void ServiceClient::Spin(int ms) {
@@ -80,6 +153,8 @@ const char* ExperimentStateName(int32_t state) {
       return "stopped";
     case experiment_status_t::STATE_FAILED:
       return "failed";
+    case experiment_status_t::STATE_INTERRUPTED:
+      return "interrupted";
   }
   return "unknown";
 }
@@ -98,20 +173,21 @@ int64_t ServiceClient::StartExperiment(const std::string& rig, int64_t experimen
   r.duration_s = duration_s;
   r.speed = speed;
   r.max_abs = max_abs;
-  r.requested_by = "idrig-cli";
-  transport_->PublishMessage(Channel(rig, ChannelKind::kExperimentRequest), r);
+  r.requested_by = Signer().sender();
+  Signer().Publish(*transport_, Channel(rig, ChannelKind::kExperimentRequest), r);
   return r.request_id;
 }
 
-void ServiceClient::StopExperiment(const std::string& rig, int64_t experiment_id) {
+void ServiceClient::StopExperiment(const std::string& rig, int64_t experiment_id,
+                                   int64_t request_id) {
   experiment_request_t r{};
   r.utime = NowMicros();
-  r.request_id = NewId();
+  r.request_id = request_id;
   r.rig_id = rig;
   r.experiment_id = experiment_id;
   r.action = experiment_request_t::ACTION_STOP;
-  r.requested_by = "idrig-cli";
-  transport_->PublishMessage(Channel(rig, ChannelKind::kExperimentRequest), r);
+  r.requested_by = Signer().sender();
+  Signer().Publish(*transport_, Channel(rig, ChannelKind::kExperimentRequest), r);
 }
 
 void ServiceClient::RequestIdentify(const std::string& rig, int64_t request_id,
@@ -124,8 +200,8 @@ void ServiceClient::RequestIdentify(const std::string& rig, int64_t request_id,
   r.experiment_id = experiment_id;
   r.method = method;
   r.options_json = options_json.empty() ? "{}" : options_json;
-  r.requested_by = "idrig-cli";
-  transport_->PublishMessage(Channel(rig, ChannelKind::kIdentifyRequest), r);
+  r.requested_by = Signer().sender();
+  Signer().Publish(*transport_, Channel(rig, ChannelKind::kIdentifyRequest), r);
 }
 
 const experiment_status_t* ServiceClient::ExperimentStatus(const std::string& rig,

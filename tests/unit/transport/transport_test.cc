@@ -6,6 +6,17 @@
 
 #include <idrig/actuator_command_t.hpp>
 #include <idrig/measurement_block_t.hpp>
+#include <idrig/experiment_request_t.hpp>
+#include <idrig/experiment_status_t.hpp>
+#include <idrig/identify_claim_t.hpp>
+#include <idrig/identify_request_t.hpp>
+#include <idrig/model_result_t.hpp>
+#include <idrig/replay_done_t.hpp>
+#include <idrig/request_reply_t.hpp>
+#include <idrig/result_ack_t.hpp>
+#include <idrig/service_status_t.hpp>
+#include <idrig/replay_request_t.hpp>
+#include <idrig/signed_message_t.hpp>
 
 #include "core/transport/channels.h"
 #include "core/transport/signing.h"
@@ -99,6 +110,115 @@ TEST(Signing, KeyFileErrorsNameTheFile) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos);
   }
+}
+
+// Regression (tests/fuzz/fuzz_messages, crash-b54a5555…): a message with the right
+// fingerprint whose string length field is 0 made lcm-gen's decoder throw std::length_error
+// out of Decode<T>; now it is counted as undecodable. The input: a measurement block's
+// encoding with actuator_command_t's fingerprint, so utime/seq/key_id read the block's header
+// and rig_id's length field reads zeros.
+TEST(Transport, DecodeCountsAThrowingDecoderAsUndecodable) {
+  measurement_block_t block{};
+  block.rig_id = "sim1";
+  block.experiment_id = 1;
+  std::vector<uint8_t> bytes(block.getEncodedSize());
+  block.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  const uint64_t hash = static_cast<uint64_t>(actuator_command_t::getHash());
+  for (int i = 0; i < 8; ++i) bytes[i] = static_cast<uint8_t>(hash >> (56 - 8 * i));
+  bytes.resize(64, 0);
+  // rig_id's length sits after utime (8), seq (8), key_id (4): bytes 28..31 of the encoding.
+  for (int i = 28; i < 32; ++i) bytes[i] = 0;
+  actuator_command_t command;
+  TransportCounters counters;
+  EXPECT_NO_THROW(EXPECT_FALSE(Decode(bytes.data(), bytes.size(), &command, &counters)));
+  EXPECT_EQ(counters.undecodable, 1);
+}
+
+template <class T>
+std::vector<uint8_t> Encode(const T& m) {
+  std::vector<uint8_t> bytes(m.getEncodedSize());
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+// Regression (fuzz_messages, crash-bfd91f86…): a short message claiming a huge array count made
+// the decoder allocate gigabytes before noticing the bytes were not there. Real encodings of
+// every type with arrays pass the plausibility walk; a claimed count of 2·10⁹ does not.
+TEST(Transport, ArrayCountsAMessageCannotHoldAreRefusedBeforeAllocating) {
+  measurement_block_t block{};
+  block.rig_id = "rig-a";
+  block.n_samples = 3;
+  block.n_inputs = 2;
+  block.n_outputs = 1;
+  block.u.assign(3, {1.0, 2.0});
+  block.y.assign(3, {3.0});
+  actuator_command_t command = Command(1);
+  signed_message_t envelope{};
+  envelope.sender = "s";
+  envelope.key_role = "operator";
+  envelope.payload_type = "x";
+  envelope.payload_size = 5;
+  envelope.payload.assign(5, 7);
+  replay_request_t request{};
+  request.requester = "w";
+  request.rig_id = "rig-a";
+  request.n_have = 2;
+  request.have_seqs = {1, 2};
+  replay_done_t done{};
+  done.requester = "w";
+  done.rig_id = "rig-a";
+  done.n_missing = 1;
+  done.missing_seqs = {4};
+  TransportCounters counters;
+  auto round_trip = [&](auto message) {
+    const auto bytes = Encode(message);
+    decltype(message) out;
+    return Decode(bytes.data(), bytes.size(), &out, &counters);
+  };
+  EXPECT_TRUE(round_trip(block));
+  EXPECT_TRUE(round_trip(command));
+  EXPECT_TRUE(round_trip(envelope));
+  EXPECT_TRUE(round_trip(request));
+  EXPECT_TRUE(round_trip(done));
+  EXPECT_EQ(counters.undecodable, 0);
+  // The command with n_samples = 2·10⁹ and its 3 samples: 16 GB claimed in a 100-byte message.
+  std::vector<uint8_t> bytes = Encode(command);
+  const size_t n_samples_at = bytes.size() - 32 - 3 * 8 - 4;
+  const uint32_t huge = 2000000000u;
+  for (int i = 0; i < 4; ++i) bytes[n_samples_at + i] = static_cast<uint8_t>(huge >> (24 - 8 * i));
+  actuator_command_t out;
+  EXPECT_FALSE(Decode(bytes.data(), bytes.size(), &out, &counters));
+  EXPECT_EQ(counters.undecodable, 1);
+  std::vector<uint8_t> block_bytes = Encode(block);
+  const size_t counts_at = block_bytes.size() - 9 * 8 - 12;
+  for (int i = 0; i < 4; ++i) block_bytes[counts_at + i] = static_cast<uint8_t>(huge >> (24 - 8 * i));
+  measurement_block_t block_out;
+  EXPECT_FALSE(Decode(block_bytes.data(), block_bytes.size(), &block_out, &counters));
+  EXPECT_EQ(counters.undecodable, 2);
+  // Every string-only type: a real encoding passes; a string length of INT_MIN does not (lcm-gen
+  // would compute INT_MIN - 1 and read 2 GB: fuzz_messages, crash-9112085f…).
+  experiment_status_t status{};
+  status.source = "rig";
+  status.rig_id = "rig-a";
+  service_status_t service{};
+  service.service = "excite";
+  model_result_t result{};
+  result.rig_id = "rig-a";
+  result.report_json = "{}";
+  EXPECT_TRUE(round_trip(experiment_request_t{}));
+  EXPECT_TRUE(round_trip(status));
+  EXPECT_TRUE(round_trip(identify_claim_t{}));
+  EXPECT_TRUE(round_trip(identify_request_t{}));
+  EXPECT_TRUE(round_trip(result));
+  EXPECT_TRUE(round_trip(result_ack_t{}));
+  EXPECT_TRUE(round_trip(request_reply_t{}));
+  EXPECT_TRUE(round_trip(service));
+  EXPECT_EQ(counters.undecodable, 2);
+  std::vector<uint8_t> result_bytes = Encode(result);
+  for (int i = 0; i < 4; ++i) result_bytes[24 + i] = i == 0 ? 0x80 : 0;  // rig_id's length
+  model_result_t result_out;
+  EXPECT_FALSE(Decode(result_bytes.data(), result_bytes.size(), &result_out, &counters));
+  EXPECT_EQ(counters.undecodable, 3);
 }
 
 TEST(Transport, MemqDeliversAndCountsBadMessages) {

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets with clang (ASan + UBSan, coverage) in build-fuzz/ and runs each
+# for RUNS executions (default 10^6) from its committed seed corpus (tests/fuzz/corpus/<target>;
+# new inputs go to build-fuzz/corpus/<target>). A crash leaves build-fuzz/crash-* and stops.
+# A benchmark, not a test: figures in docs/services.md ("Fuzzing").
+# Usage: tests/fuzz/run_fuzz.sh [RUNS] [TARGET...]   (needs clang: deploy/install-bench-deps.sh)
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+runs=${1:-1000000}; shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_messages fuzz_excitation_spec fuzz_model_json fuzz_csv fuzz_frf_csv fuzz_effect_json)
+flags="-O1 -g -fno-omit-frame-pointer -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined"
+cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIDRIG_FUZZ=ON \
+  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+  -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
+for t in "${targets[@]}"; do
+  cmake --build build-fuzz -j2 --target "$t" >/dev/null
+  mkdir -p "build-fuzz/corpus/$t"
+  start=$(date +%s.%N)
+  (cd build-fuzz && "bin/$t" -runs="$runs" -max_len=4096 -timeout=10 -rss_limit_mb=2048 \
+     -print_final_stats=1 "corpus/$t" "../tests/fuzz/corpus/$t" 2> "fuzz-$t.log") \
+    || { echo "$t: CRASH (build-fuzz/fuzz-$t.log)"; tail -40 "build-fuzz/fuzz-$t.log"; exit 1; }
+  end=$(date +%s.%N)
+  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "build-fuzz/fuzz-$t.log" | grep -o '[0-9]*$')
+  cov=$(grep -o 'cov: [0-9]*' "build-fuzz/fuzz-$t.log" | tail -1)
+  printf '%-22s %10s executions in %6.1f s, %s, no crash\n' "$t" "$execs" "$(echo "$end - $start" | bc)" "$cov"
+done
