@@ -240,7 +240,7 @@ TEST(Pipeline, ExperimentToModelsInTheCatalogue) {
   // so a threshold of 100.5 % must give poor_fit, with the warning in the stored report.
   Catalog reader(p.catalog_path);
   EXPECT_EQ(reader.ModelForRequest(9002)->status, "ok");
-  RequestModel(*p.transport, 9003, 101, "arx", "{\"order\":3,\"min_fit_percent\":100.5}");
+  RequestModel(p, 9003, 101, "arx", "{\"order\":3,\"min_fit_percent\":100.5}");
   ASSERT_TRUE(p.RunUntil([&] { return reader.ModelForRequest(9003).has_value(); }, 20.0));
   const ModelRecord poor = *reader.ModelForRequest(9003);
   EXPECT_EQ(poor.status, "poor_fit");
