@@ -13,13 +13,19 @@ command -v curl >/dev/null && command -v jq >/dev/null || { echo "skipped: needs
 dir=$(mktemp -d)
 trap 'rm -rf "$dir"' EXIT
 url='udpm://239.255.76.67:7695?ttl=0'
-echo "{\"db_path\": \"$dir/catalog.db\"}" > "$dir/catalog.json"
+# The services refuse to start without their keys (docs/services.md): fresh ones, mode 600.
+for k in operator service; do
+  head -c 32 /dev/urandom | od -An -tx1 | tr -d ' \n' > "$dir/$k.key"; chmod 600 "$dir/$k.key"
+done
+keys="\"operator_key_file\": \"$dir/operator.key\", \"service_key_file\": \"$dir/service.key\", \"state_dir\": \"$dir/state\""
+echo "{\"db_path\": \"$dir/catalog.db\", $keys}" > "$dir/catalog.json"
+echo "{$keys}" > "$dir/worker.json"
 cat > "$dir/run.sh" <<SH
 set -eu
 ip link set lo up multicast on && ip route add 224.0.0.0/4 dev lo
 "$bin/idrig-catalog" --config "$dir/catalog.json" --url '$url' > "$dir/catalog.log" 2>&1 &
 c=\$!
-"$bin/idrig-worker" --id w-live --url '$url' > "$dir/worker.log" 2>&1 &
+"$bin/idrig-worker" --config "$dir/worker.json" --id w-live --url '$url' > "$dir/worker.log" 2>&1 &
 w=\$!
 for _ in \$(seq 50); do [ -f "$dir/catalog.db" ] && break; sleep 0.1; done
 "$idrig" serve --db "$dir/catalog.db" --experiments "$dir/none.db" --url '$url' --port 0 > "$dir/serve.txt" 2>&1 &
