@@ -4,6 +4,7 @@
 
 #include "core/io/model_json.h"
 #include "core/methods/registry.h"
+#include "core/methods/report_json.h"
 #include "core/numeric/time_domain/arx.h"
 
 namespace idrig {
@@ -11,17 +12,9 @@ namespace {
 
 using nlohmann::json;
 
-json Vec(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
-json Mat(const Eigen::MatrixXd& m) {
-  json rows = json::array();
-  for (int r = 0; r < m.rows(); ++r) rows.push_back(Vec(m.row(r).transpose()));
-  return rows;
-}
-json Complex(const Eigen::VectorXcd& v) {
-  json out = json::array();
-  for (int i = 0; i < v.size(); ++i) out.push_back({v(i).real(), v(i).imag()});
-  return out;
-}
+using report_json::Complex;
+using report_json::Mat;
+using report_json::Vec;
 
 std::string Row(const Eigen::MatrixXd& m) {
   std::ostringstream s;

@@ -11,6 +11,7 @@
 
 #include "core/io/model_json.h"
 #include "core/methods/registry.h"
+#include "core/methods/report_json.h"
 #include "core/methods/subspace_pem_method.h"
 #include "core/numeric/time_domain/pem.h"
 #include "core/numeric/time_domain/subspace.h"
@@ -21,17 +22,9 @@ namespace {
 
 using nlohmann::json;
 
-json Vec(const Eigen::VectorXd& v) { return std::vector<double>(v.data(), v.data() + v.size()); }
-json Mat(const Eigen::MatrixXd& m) {
-  json rows = json::array();
-  for (int r = 0; r < m.rows(); ++r) rows.push_back(Vec(m.row(r).transpose()));
-  return rows;
-}
-json Complex(const Eigen::VectorXcd& v) {
-  json out = json::array();
-  for (int i = 0; i < v.size(); ++i) out.push_back({v(i).real(), v(i).imag()});
-  return out;
-}
+using report_json::Complex;
+using report_json::Mat;
+using report_json::Vec;
 
 int GetInt(const json& o, const char* key, int fallback) {
   if (!o.contains(key)) return fallback;
