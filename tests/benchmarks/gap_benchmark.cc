@@ -4,8 +4,11 @@
 // it ran) and the linear-order check are included. Goal (issues 7, 13): ≤ 10 s on the 2-core
 // machine.
 //   build/bin/gap_benchmark --benchmark_counters_tabular=true
+// IDRIG_GAP_NOTES=1 prints the report's notes (what was tried, and why it was kept) to stderr.
 #include <benchmark/benchmark.h>
 
+#include <cstdio>
+#include <cstdlib>
 #include <random>
 
 #include "core/numeric/gap/gap_bench.h"
@@ -29,8 +32,10 @@ void BM_Diagnose(benchmark::State& state) {
     verdict = report.verdict.effect;
     for (const auto& e : report.verdict.effects)
       if (&e != &report.verdict.effects.front()) verdict += std::string("+") + idrig::EffectName(e.kind);
-    for (const auto& n : report.notes)
+    for (const auto& n : report.notes) {
       if (n.rfind("second effect", 0) == 0) second_search = 1;
+      if (std::getenv("IDRIG_GAP_NOTES")) std::fprintf(stderr, "note: %s\n", n.c_str());
+    }
   }
   state.counters["second_search"] = second_search;
   state.SetLabel(std::string(idrig::EffectName(effect)) + " -> " + verdict);

@@ -228,6 +228,20 @@ void EffectSimulator::Reset() {
   backlash_.assign(effects_.size(), 0.0);
 }
 
+// Coulomb friction as a set-valued force (Filippov; Karnopp's discrete stick rule): the force
+// f that brings dy/dt to zero at the end of this sub-step, f_stop = u − u_stop with
+// u_stop = −(v_row A x)/(v_row B + v_in), is applied when |f_stop| ≤ F_c (the axis stops or stays
+// stuck: static = kinetic friction); otherwise F_c·sign(f_stop), which opposes the motion the
+// sub-step would give. Unlike F_c·sign(dy/dt) this does not chatter at reversals, so the result
+// does not depend on the sub-step (a mass below its breakaway force does not creep).
+double EffectSimulator::FrictionForce(double u, double limit) const {
+  const double gain = velocity_row_.dot(B_) + velocity_input_;  // ∂(dy/dt)_next / ∂u
+  const double free = velocity_row_.dot(A_ * x_);                // (dy/dt)_next at u = 0
+  if (!(std::abs(gain) > 1e-300)) return limit * Sign(velocity_row_.dot(x_) + velocity_input_ * u);
+  const double stop = u + free / gain;  // u − u_stop
+  return std::clamp(stop, -limit, limit);
+}
+
 double EffectSimulator::Step(double u) {
   // Input side: static maps and the play operator, in the order given.
   for (size_t i = 0; i < effects_.size(); ++i) {
@@ -254,15 +268,13 @@ double EffectSimulator::Step(double u) {
     y = 0.0;
     for (int j = 0; j < substeps_; ++j) {
       double u_eff = u;
-      for (const Effect& e : effects_) {
-        if (e.kind == EffectKind::kCoulombFriction) {
-          const double velocity = velocity_row_.dot(x_) + velocity_input_ * u;  // dy/dt
-          u_eff -= e.params[0] * Sign(velocity);
-        } else if (e.kind == EffectKind::kCubicStiffness) {
+      for (const Effect& e : effects_)
+        if (e.kind == EffectKind::kCubicStiffness) {
           const double position = C_.dot(x_) + D_ * u;
           u_eff -= e.params[0] * position * position * position;
         }
-      }
+      for (const Effect& e : effects_)
+        if (e.kind == EffectKind::kCoulombFriction) u_eff -= FrictionForce(u_eff, e.params[0]);
       if (j == 0) y = C_.dot(x_) + D_ * u_eff;
       next_.noalias() = A_ * x_;
       next_ += B_ * u_eff;

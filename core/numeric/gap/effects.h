@@ -14,7 +14,8 @@
 //   input_saturation       u_lo, u_hi                         y = G0 clip(u, u_lo, u_hi)
 //   dead_zone              d                                  u_eff = sign(u)·max(|u| − d, 0)
 //   backlash               r                                  w = max(u − r, min(u + r, w_prev))
-//   coulomb_friction       F_c                                u_eff = u − F_c·sign(dy/dt)
+//   coulomb_friction       F_c                                u_eff = u − f, f = F_c·sign(dy/dt)
+//                                                             while sliding, |f| ≤ F_c stuck
 //   cubic_stiffness        k3                                 u_eff = u − k3·y³
 //   output_saturation      y_lo, y_hi                         y_m = clip(y, y_lo, y_hi)
 //   sensor_nonlinearity    a1, a2, a3, absolute               y_m = a1 y + a2 y² + a3 y³,
@@ -92,6 +93,9 @@ class EffectSimulator {
   const std::vector<Effect>& effects() const { return effects_; }
 
  private:
+  // The friction force on the plant's input in this sub-step for driving input u (effects.cc).
+  double FrictionForce(double u, double limit) const;
+
   std::vector<Effect> effects_;
   bool feedback_ = false;
   int substeps_ = 1;

@@ -121,7 +121,42 @@ TEST(EffectsTest, CoulombFrictionReducesTheDrivingForce) {
                                                Eigen::VectorXd::Constant(2000, u0), ts);
   const double velocity = (y(1999) - y(1998)) / ts;
   EXPECT_NEAR(velocity, (u0 - friction) / 2.0, 1e-6);
-  // Below the breakaway force the mass still moves here (pure Coulomb, no stiction), but slower.
+}
+
+TEST(EffectsTest, CoulombFrictionHoldsAMassBelowItsBreakawayForce) {
+  // Filippov's solution of m v' = u − c v − F_c·sign(v) from rest with |u| < F_c: v ≡ 0. The
+  // explicit F_c·sign(v) rule chatters there and creeps; the stick rule must not.
+  TransferFunction plant;
+  plant.num = Eigen::VectorXd::Constant(1, 1.0);
+  plant.den = Eigen::Vector3d(1.0, 2.0, 0.0);
+  for (int substeps : {1, 4, 16}) {
+    const Eigen::VectorXd y = SimulateWithEffect(plant, {EffectKind::kCoulombFriction, {0.3}},
+                                                 Eigen::VectorXd::Constant(500, 0.25), 0.01, {substeps});
+    EXPECT_LT(y.cwiseAbs().maxCoeff(), 1e-12) << substeps << " sub-steps";
+  }
+}
+
+TEST(EffectsTest, CoulombFrictionStopsAMassWhereTheClosedFormSays) {
+  // 1/(s(s + c)) driven by u0 for T1 (velocity settles at (u0 − F)/c), then u = 0: v(t) =
+  // (v1 + F/c) e^{−ct} − F/c until it reaches 0 at t* = ln(1 + c v1/F)/c, and then it stays at
+  // rest. Final position = y(T1) + [(v1 + F/c)(1 − e^{−ct*}) − F t*]/c.
+  TransferFunction plant;
+  plant.num = Eigen::VectorXd::Constant(1, 1.0);
+  plant.den = Eigen::Vector3d(1.0, 2.0, 0.0);
+  const double c = 2.0, u0 = 1.0, friction = 0.3, ts = 0.01;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(3000);
+  u.head(1500).setConstant(u0);
+  for (int substeps : {4, 64}) {
+    const Eigen::VectorXd y =
+        SimulateWithEffect(plant, {EffectKind::kCoulombFriction, {friction}}, u, ts, {substeps});
+    const double v1 = (y(1500) - y(1499)) / ts;  // (u0 − F)/c to 1e-6 after 15 s
+    ASSERT_NEAR(v1, (u0 - friction) / c, 1e-5);
+    const double t_stop = std::log(1 + c * v1 / friction) / c;
+    const double travel = ((v1 + friction / c) * (1 - std::exp(-c * t_stop)) - friction * t_stop) / c;
+    // y(1501) is the first sample after u falls; one sample of ZOH skew → tolerance ~ v1·ts².
+    EXPECT_NEAR(y(2999) - y(1500), travel, 2e-3) << substeps << " sub-steps";
+    EXPECT_EQ(y(2999), y(2500)) << "no creep once stopped (" << substeps << " sub-steps)";
+  }
 }
 
 TEST(EffectsTest, BadEffectsAreRejectedWithTheirNames) {
