@@ -246,7 +246,9 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
       const Candidate& c = table[k + i];
       std::ostringstream cell;
       cell << std::setprecision(2) << std::fixed;
-      if (std::isfinite(c.fit)) cell << c.fit; else cell << "-";
+      if (!std::isfinite(c.fit)) cell << "-";
+      else if (c.fit < -999.0) cell << "< -999";  // a diverging fit; the JSON has the value
+      else cell << c.fit;
       t << std::setw(11) << cell.str() << (&c == chosen ? "*" : " ");
     }
     t << "\n";
