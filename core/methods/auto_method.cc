@@ -1,17 +1,24 @@
 // `auto`: the default of `idrig identify`. Every applicable method (SISO: oe, n4sid, arx-oe;
 // MIMO: n4sid, oe per output), each also with a direct input term (oe with input_delay 0,
-// n4sid with D), at every order 1..max_order is estimated on the first two thirds of the
-// record; each model simulates the whole record from rest and is scored on the last third
-// (mean simulation fit over the outputs). The choice is the smallest order whose NRMSE is
-// within 2 % of the best; among candidates at that order, the first in the list (oe first:
-// under white output noise it is the maximum-likelihood estimate). The winner is refitted on
-// the whole record and its report returned, with the table of candidates.
+// n4sid with D), at every order 1..max_order is scored by forward (rolling-origin)
+// cross-validation in two folds: estimated on the samples before the point where the
+// cumulative input energy reaches 2/3, resp. 3/4, of its total (auto_method.h: the information
+// about the parameters accrues with the input energy), each model simulates the whole record
+// from rest and is scored on the samples after that point (mean simulation fit over the
+// outputs). A candidate's score is the root mean square of its NRMSEs over the folds
+// (P. Stoica, P. Eykhoff, P. Janssen, T. Söderström, "Model-structure selection by
+// cross-validation", Int. J. Control 43(6), 1986; [Ljung] §16.5). The choice is the smallest
+// order whose score is within 2 % of the best; among candidates at that order, the first in the
+// list (oe first: under white output noise it is the maximum-likelihood estimate). The winner
+// is refitted on the whole record and its report returned, with the table of candidates.
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <limits>
 #include <sstream>
 
 #include "core/io/model_json.h"
+#include "core/methods/auto_method.h"
 #include "core/methods/subspace_pem_method.h"
 #include "core/numeric/validation.h"
 
@@ -30,15 +37,60 @@ struct Candidate {
   std::string label, method;
   json options;
   int order = 0;
-  double fit = -std::numeric_limits<double>::infinity();  // mean validation fit [%]
+  double fit = -std::numeric_limits<double>::infinity();  // 100·(1 − RMS of the fold NRMSEs) [%]
+  std::vector<double> fold_fits;                         // mean validation fit per fold [%]
   std::string note;                                      // why it was not scored
 };
 
+}  // namespace
+
+int InputEnergySplit(const Eigen::MatrixXd& u, double fraction, int min_head, int min_tail) {
+  const int samples = static_cast<int>(u.rows());
+  if (!(fraction > 0.0 && fraction < 1.0))
+    throw std::invalid_argument("input energy split: the fraction must lie in (0, 1)");
+  if (min_head < 0 || min_tail < 0 || min_head + min_tail > samples)
+    throw std::invalid_argument("input energy split: " + std::to_string(samples) + " samples cannot keep " +
+                                std::to_string(min_head) + " before and " + std::to_string(min_tail) + " after the split");
+  Eigen::VectorXd share = Eigen::VectorXd::Zero(samples);  // Σ_j (u_j − ū_j)²/(nu E_j) per sample
+  int inputs_with_energy = 0;
+  for (int j = 0; j < u.cols(); ++j) {
+    const Eigen::ArrayXd e = (u.col(j).array() - u.col(j).mean()).square();
+    const double total = e.sum();
+    if (!(total > 0.0) || !std::isfinite(total)) continue;
+    share += (e / total).matrix();
+    ++inputs_with_energy;
+  }
+  int split = static_cast<int>(std::ceil(fraction * samples));
+  if (inputs_with_energy > 0) {
+    const double target = fraction * inputs_with_energy * (1.0 - 1e-12);  // a sum of N roundings
+    double cumulative = 0.0;
+    split = samples;
+    for (int k = 0; k < samples; ++k) {
+      cumulative += share(k);
+      if (cumulative >= target) { split = k + 1; break; }
+    }
+  }
+  return std::clamp(split, min_head, samples - min_tail);
+}
+
+std::vector<int> AutoFoldSplits(const Eigen::MatrixXd& u, bool by_energy) {
+  const int samples = static_cast<int>(u.rows());
+  std::vector<int> splits;
+  for (double fraction : {2.0 / 3.0, 0.75}) {
+    const int s = by_energy ? InputEnergySplit(u, fraction, samples / 2, std::max(10, samples / 10))
+                            : samples - static_cast<int>(std::floor((1.0 - fraction) * samples + 1e-9));
+    if (splits.empty() || s > splits.back()) splits.push_back(s);
+  }
+  return splits;
+}
+
+namespace {
+
 MethodReport RunAuto(const MethodInput& input, const json& o) {
-  CheckOptionKeys(o, {"order", "max_order", "candidates", "tolerance", "screen_samples"}, "auto");
+  CheckOptionKeys(o, {"order", "max_order", "candidates", "tolerance", "screen_samples", "split"}, "auto");
   const IoRecord& full_record = *input.record;
-  // Long records are screened on their first `screen_samples` samples (the same 2/3 : 1/3
-  // split of that window); the winner is refitted on the whole record.
+  // Long records are screened on their first `screen_samples` samples (the same folds in that
+  // window); the winner is refitted on the whole record.
   int screen = 15000;
   if (o.contains("screen_samples")) {
     if (!o["screen_samples"].is_number_integer() || o["screen_samples"].get<int>() < 30)
@@ -66,6 +118,12 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
       variants.push_back({m.get<std::string>(), m.get<std::string>(), json::object()});
     }
   }
+  bool by_energy = true;
+  if (o.contains("split")) {
+    if (o["split"] != "energy" && o["split"] != "samples")
+      throw std::invalid_argument("auto: option 'split' must be 'energy' (the default) or 'samples'");
+    by_energy = o["split"] == "energy";
+  }
   int max_order = 6, only_order = 0;
   if (o.contains("max_order")) {
     if (!o["max_order"].is_number_integer() || o["max_order"].get<int>() < 1)
@@ -84,11 +142,12 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
     tolerance = o["tolerance"].get<double>();
   }
   const int samples = record.NumSamples();
-  const int split = samples - samples / 3;
-  if (samples / 3 < 10)
+  if (samples < 30)
     throw std::invalid_argument("auto: the record has " + std::to_string(samples) +
                                 " samples; choosing a model on held-out data needs at least 30");
-  const IoRecord head = Slice(record, 0, split);
+  const std::vector<int> splits = AutoFoldSplits(record.u, by_energy);
+  std::vector<IoRecord> heads;
+  for (int s : splits) heads.push_back(Slice(record, 0, s));
   std::vector<Candidate> table;
   for (int n = only_order > 0 ? only_order : 1; n <= (only_order > 0 ? only_order : max_order); ++n) {
     for (const auto& v : variants) {
@@ -98,21 +157,37 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
       c.options = v.options;
       c.options["order"] = n;
       c.order = n;
-      try {
-        const MethodReport r = RunMethod(v.method, head, c.options);
-        const std::string status = r.json.value("status", "failed");
-        if (status == "failed") {
-          c.note = "status failed: " + r.json.value("message", "");
-        } else {
+      double mean_square = 0.0;
+      bool scored = true;
+      for (size_t f = 0; f < splits.size() && scored; ++f) {
+        const int split = splits[f];
+        const std::string fold = splits.size() > 1 ? "fold " + std::to_string(f + 1) + ": " : "";
+        try {
+          const MethodReport r = RunMethod(v.method, heads[f], c.options);
+          const std::string status = r.json.value("status", "failed");
+          if (status == "failed") {
+            c.note = fold + "status failed: " + r.json.value("message", "");
+            scored = false;
+            break;
+          }
+          if (status != "ok" && c.note.empty()) c.note = fold + "status " + status;
           const LtiModel model = ModelFromJson(r.json.at("model"));
           const Eigen::MatrixXd sim = Simulate(model, record.u, record.sample_time);
           const Eigen::VectorXd fit = FitPercent(record.y.bottomRows(samples - split), sim.bottomRows(samples - split));
-          c.fit = fit.allFinite() ? fit.mean() : -std::numeric_limits<double>::infinity();
-          if (status != "ok") c.note = "status " + status;
+          if (!fit.allFinite()) {
+            c.note = fold + "the simulation diverges";
+            scored = false;
+            break;
+          }
+          c.fold_fits.push_back(fit.mean());
+          const double nrmse = 1.0 - fit.mean() / 100.0;
+          mean_square += nrmse * nrmse / static_cast<double>(splits.size());
+        } catch (const std::exception& e) {
+          c.note = fold + e.what();
+          scored = false;
         }
-      } catch (const std::exception& e) {
-        c.note = e.what();
       }
+      if (scored) c.fit = 100.0 * (1.0 - std::sqrt(mean_square));
       table.push_back(c);
     }
   }
@@ -132,17 +207,29 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
   json rows = json::array();
   for (const auto& c : table)
     rows.push_back({{"candidate", c.label}, {"method", c.method}, {"options", c.options}, {"order", c.order},
-                    {"validation_fit_percent", std::isfinite(c.fit) ? json(c.fit) : json(nullptr)}, {"note", c.note}});
+                    {"validation_fit_percent", std::isfinite(c.fit) ? json(c.fit) : json(nullptr)},
+                    {"fold_fit_percent", c.fold_fits}, {"note", c.note}});
   std::ostringstream rule;
   if (record.NumSamples() < full_record.NumSamples())
     rule << "screened on the first " << record.NumSamples() << " of " << full_record.NumSamples() << " samples: ";
-  rule << "estimated on samples 0.." << split - 1 << ", scored on " << split << ".." << samples - 1
-       << " (simulation from rest); the smallest order within " << 100 * tolerance
-       << " % of the best NRMSE, then the first method in the list (" ;
+  json folds = json::array();
+  rule << splits.size() << (splits.size() > 1 ? " folds" : " fold") << " at 2/3 and 3/4 of the "
+       << (by_energy ? "input energy" : "samples") << ":";
+  for (size_t f = 0; f < splits.size(); ++f) {
+    rule << (f ? ";" : "") << " estimated on samples 0.." << splits[f] - 1 << ", scored on " << splits[f] << ".."
+         << samples - 1;
+    json fold = json::object();
+    fold["estimation"] = json::array({0, splits[f] - 1});
+    fold["validation"] = json::array({splits[f], samples - 1});
+    folds.push_back(fold);
+  }
+  rule << " (simulation from rest); score 100(1 - RMS of the fold NRMSEs); the smallest order within "
+       << 100 * tolerance << " % of the best score, then the first method in the list (";
   for (size_t k = 0; k < variants.size(); ++k) rule << (k ? ", " : "") << variants[k].label;
   rule << ")";
   selection["candidates"] = rows;
   selection["rule"] = rule.str();
+  selection["folds"] = folds;
   selection["chosen"] = {{"candidate", chosen->label}, {"method", chosen->method}, {"options", chosen->options},
                          {"order", chosen->order}, {"validation_fit_percent", chosen->fit}};
   selection["best_validation_fit_percent"] = best;
@@ -152,14 +239,16 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
   t << std::setprecision(4) << std::fixed;
   t << "Method and order chosen on held-out data: " << rule.str() << "\n\n  order";
   for (const auto& v : variants) t << std::setw(12) << v.label;
-  t << "   (fit % on the last third)\n";
+  t << "   (score %: 100(1 - RMS NRMSE) over the folds)\n";
   for (size_t k = 0; k < table.size(); k += variants.size()) {
     t << "  " << std::setw(5) << table[k].order;
     for (size_t i = 0; i < variants.size(); ++i) {
       const Candidate& c = table[k + i];
       std::ostringstream cell;
       cell << std::setprecision(2) << std::fixed;
-      if (std::isfinite(c.fit)) cell << c.fit; else cell << "-";
+      if (!std::isfinite(c.fit)) cell << "-";
+      else if (c.fit < -999.0) cell << "< -999";  // a diverging fit; the JSON has the value
+      else cell << c.fit;
       t << std::setw(11) << cell.str() << (&c == chosen ? "*" : " ");
     }
     t << "\n";
@@ -174,8 +263,8 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
 
 MethodInfo AutoMethod() {
   return {"auto",
-          "default: every applicable method and order estimated on 2/3 of the record, chosen by fit on the last "
-          "third, refitted on all of it",
+          "default: every applicable method and order, chosen by simulation fit on held-out data (two folds "
+          "split at 2/3 and 3/4 of the input energy), refitted on the whole record",
           true, [](const MethodInput& in, const json& o) { return RunAuto(in, o); }};
 }
 

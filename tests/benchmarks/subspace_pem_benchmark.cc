@@ -270,12 +270,23 @@ int Real(const std::string& shared, const std::string& dir) {
     std::string per_text;
     for (int k = 0; k < per.size(); ++k) per_text += (k ? "/" : "") + std::to_string(per(k)).substr(0, 5);
     std::printf("%-14s N=%d nu=%d ny=%d  default: %s n=%d fit %.1f %% (%s) [%.2f s]", rec.name.c_str(), samples,
-                full.NumInputs(), full.NumOutputs(), def.json.value("chosen_method", "?").c_str(), order,
-                fit_default, per_text.c_str(), t_auto);
+                full.NumInputs(), full.NumOutputs(),
+                def.json.at("selection").at("chosen").value("candidate", "?").c_str(), order, fit_default,
+                per_text.c_str(), t_auto);
     std::ofstream results(dir + "/real_idrig_" + rec.name + ".txt");
     std::string label = def.json.at("selection").at("chosen").value("candidate", "?");
     std::replace(label.begin(), label.end(), ' ', '_');
     results << rec.name << " default " << order << " " << fit_default << " " << label << "\n";
+    {  // the same folds split by sample count (option split=samples), for comparison
+      const MethodReport by_samples = RunMethod("auto", est, {{"split", "samples"}});
+      std::string l = by_samples.json.at("selection").at("chosen").value("candidate", "?");
+      std::replace(l.begin(), l.end(), ' ', '_');
+      const double f = ValidationFit(ModelFromJson(by_samples.json.at("model")), full, split, &per);
+      results << rec.name << " bysamples " << by_samples.json.at("selection").at("chosen").at("order").get<int>() << " "
+              << f << " " << l << "\n";
+      std::printf(" | split=samples: %s n=%d fit %.1f %%", l.c_str(),
+                  by_samples.json.at("selection").at("chosen").at("order").get<int>(), f);
+    }
     for (int n = 1; n <= 8; ++n) {
       const std::pair<const char*, nlohmann::json> variants[] = {
           {"n4sid", {{"order", n}}}, {"n4sid_D", {{"order", n}, {"feedthrough", true}}},
