@@ -171,6 +171,45 @@ Eigen::VectorXd Candidate::Phi(size_t i, const std::vector<double>& p) const {
   return phi;
 }
 
+// The best predictor of q·round((y + n)/q) when noise n ~ N(0, s²) enters before the rounding is
+// its conditional mean, a staircase smoothed by s (s → 0: the staircase). With r = y/q, σ = s/q:
+//  - σ ≥ 0.1: the Fourier series of the sawtooth r − round(r) = Σ_m (−1)^(m+1) sin(2πmr)/(πm),
+//    each harmonic damped by the Gaussian's characteristic function exp(−2π²m²σ²), so
+//    E[round(r + ν)] = r − Σ_m (−1)^(m+1) e^(−2π²m²σ²) sin(2πmr)/(πm), truncated where the
+//    factor is < 1e-13 (m ≤ 1.25/σ + 1): one sin/cos per sample, harmonics by recurrence;
+//  - σ < 0.1: only the two boundaries next to r matter (a jump of two levels needs |ν| ≥ 0.5 =
+//    5σ): E = m + P(r + ν ≥ m + ½) − P(r + ν < m − ½), m = round(r), and exactly m when r is
+//    more than 8.5σ from both (tails < 1e-17).
+void SmoothedStaircase(Eigen::VectorXd& y, double q, double s) {
+  const double sigma = s / q;
+  if (sigma >= 0.1) {
+    const int harmonics = static_cast<int>(std::ceil(1.25 / sigma)) + 1;
+    std::vector<double> weight(harmonics + 1);
+    for (int m = 1; m <= harmonics; ++m)
+      weight[m] = (m % 2 ? 1.0 : -1.0) * std::exp(-2 * M_PI * M_PI * m * m * sigma * sigma) / (M_PI * m);
+    for (long k = 0; k < y.size(); ++k) {
+      const double r = y(k) / q;
+      const double c1 = std::cos(2 * M_PI * (r - std::round(r))), s1 = std::sin(2 * M_PI * (r - std::round(r)));
+      double sm = s1, cm = c1, saw = weight[1] * s1;
+      for (int m = 2; m <= harmonics; ++m) {
+        const double sn = sm * c1 + cm * s1, cn = cm * c1 - sm * s1;
+        sm = sn, cm = cn;
+        saw += weight[m] * sm;
+      }
+      y(k) = q * (r - saw);
+    }
+    return;
+  }
+  const double scale = 1.0 / (sigma * M_SQRT2);
+  for (long k = 0; k < y.size(); ++k) {
+    const double r = y(k) / q, m = std::round(r), f = r - m;  // f in [−½, ½]
+    double mean = m;
+    if (0.5 - f < 8.5 * sigma) mean += 0.5 * std::erfc((m + 0.5 - r) * scale);  // up one level
+    if (0.5 + f < 8.5 * sigma) mean -= 0.5 * std::erfc((r - m + 0.5) * scale);  // down one
+    y(k) = q * mean;
+  }
+}
+
 Eigen::VectorXd Candidate::Simulate(const Eigen::VectorXd& x, const GapRecord& record) const {
   EffectSimulationOptions options;
   options.substeps = substeps_;
@@ -188,23 +227,7 @@ Eigen::VectorXd Candidate::Simulate(const Eigen::VectorXd& x, const GapRecord& r
   const double du = InputOffset(x);
   const Eigen::VectorXd u = du != 0 ? Eigen::VectorXd(record.u.array() + du) : record.u;
   Eigen::VectorXd y = SimulateWithEffects(Plant(x), effects, u, record.sample_time, options);
-  if (q > 0) {
-    // The best predictor of q·round((y + n)/q) when noise n ~ N(0, s²) enters before the
-    // rounding is its conditional mean, a staircase smoothed by s (s → 0: the staircase).
-    const int reach = static_cast<int>(std::ceil(5 * s / q)) + 1;
-    for (long k = 0; k < y.size(); ++k) {
-      const double m = std::round(y(k) / q);
-      double mean = 0;
-      for (int j = -reach; j <= reach; ++j) {
-        const double level = m + j;
-        const double upper = 0.5 * std::erfc(-((level + 0.5) * q - y(k)) / (s * M_SQRT2));
-        const double lower = 0.5 * std::erfc(-((level - 0.5) * q - y(k)) / (s * M_SQRT2));
-        mean += level * (upper - lower);
-      }
-      // Levels beyond the reach carry < 1e-6 of the probability.
-      y(k) = q * mean;
-    }
-  }
+  if (q > 0) SmoothedStaircase(y, q, s);
   return y;
 }
 

@@ -136,6 +136,8 @@ std::vector<std::vector<double>> Starts(EffectKind kind, const Scales& s);
 
 // Candidate quantisation step from the samples' lattice; *strength = its mean resultant length.
 double QuantisationStep(const std::vector<GapRecord>& records, double* strength);
+// In place: y → E[q·round((y + n)/q)], n ~ N(0, s²) (the quantisation candidate's predictor).
+void SmoothedStaircase(Eigen::VectorXd& y, double q, double s);
 
 // Every sample within 2 % of the range from the minimum or the maximum.
 bool BinaryInput(const std::vector<GapRecord>& records);

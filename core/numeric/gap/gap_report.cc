@@ -334,6 +334,22 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const Eigen::VectorXd y_refit_val =
       Stack(validation, [&](const GapRecord& r) { return refit.Predict(refit_fit.x, r); });
   {
+    // The output's scales in the model's coordinates: the measured y less the refit's output
+    // offset b (a sensor offset, plus G0(0)·du), so that the limits of an output saturation and
+    // the scale of a cubic spring or a sensor map start where the plant's output is, not where
+    // the sensor's zero puts it.
+    std::vector<double> centred;
+    for (const auto& r : estimation) {
+      Nuisance nuisance;
+      refit.Predict(refit_fit.x, r, &nuisance);
+      for (long k = 0; k < r.y.size(); ++k) centred.push_back(r.y(k) - nuisance.output_offset);
+    }
+    double y_max = 0;
+    for (double v : centred) y_max = std::max(y_max, std::abs(v));
+    scales.y_max = std::max(1e-12, y_max);
+    for (int i = 0; i < 4; ++i) scales.y_quantile[i] = Quantile(centred, yq[i]);
+  }
+  {
     // Lag that best aligns G0's output with the measured one (a delay's natural start).
     const GapRecord& first = estimation.front();
     const Eigen::VectorXd y0 = as_is.Predict(as_is_fit.x, first);

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "core/numeric/gap/gap_bench.h"
 #include "core/numeric/gap/gap_internal.h"
@@ -64,6 +65,33 @@ TEST(GapLatticeTest, NoStepNoLattice) {
   r.y = r.u;
   r.sample_time = 0.01;
   EXPECT_FALSE(DetectOutputLattice({r}, 0.0, 0.1).lattice);
+}
+
+TEST(GapLatticeTest, SmoothedStaircaseIsTheConditionalMeanOfTheRoundedNoisyValue) {
+  // Reference: the definition, Σ_level level·P(round((y + n)/q) = level) with n ~ N(0, s²),
+  // summed over ±60 levels with erfc (the predictor's fast forms are a Fourier series and a
+  // two-boundary sum).
+  const double q = 0.37;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> uniform(-4.0, 4.0);
+  Eigen::VectorXd y(400);
+  for (long k = 0; k < y.size(); ++k) y(k) = uniform(rng);
+  y(0) = 0.5 * q, y(1) = -1.5 * q, y(2) = 0.0;  // on a boundary, and on a level
+  for (double sigma : {1e-4, 0.01, 0.05, 0.0999, 0.1, 0.3, 1.0, 3.0}) {
+    const double s = sigma * q;
+    Eigen::VectorXd fast = y;
+    gap_detail::SmoothedStaircase(fast, q, s);
+    for (long k = 0; k < y.size(); ++k) {
+      const double m = std::round(y(k) / q);
+      double mean = 0;
+      for (int j = -60; j <= 60; ++j) {
+        const double level = m + j;
+        mean += level * 0.5 * (std::erfc(-((level + 0.5) * q - y(k)) / (s * M_SQRT2)) -
+                               std::erfc(-((level - 0.5) * q - y(k)) / (s * M_SQRT2)));
+      }
+      ASSERT_NEAR(fast(k), q * mean, 1e-9 * q) << "sigma " << sigma << ", y " << y(k);
+    }
+  }
 }
 
 }  // namespace
