@@ -25,15 +25,48 @@ Eigen::MatrixXd FreeResponse(const TransferFunction& plant, double ts, long n) {
   const StateSpace d = DiscretizeZoh(ToStateSpace(g), ts);
   Eigen::MatrixXd f(n, d.A.rows());
   Eigen::RowVectorXd c = d.C.row(0);
+  double largest = 0;
   for (long k = 0; k < n; ++k) {
     f.row(k) = c;
+    const double norm = c.norm();
+    largest = std::max(largest, norm);
+    // A stable plant's free response decays: below 1e-15 of its largest row it is zero for the
+    // projection, so the rows end here (the caller treats the missing rows as zeros).
+    if (!(norm > 1e-15 * largest)) return f.topRows(k + 1);
     c = c * d.A;
-    if (!c.allFinite()) {
-      f.bottomRows(n - k - 1).setZero();
-      break;
-    }
+    if (!c.allFinite()) return f.topRows(k + 1);
   }
   return f;
+}
+
+// Least squares of r on [1, F] (F = the free response's first rows, zero below them) through
+// the small normal equations, equilibrated and solved by a symmetric eigen-decomposition with a
+// relative cut-off (a minimum-norm solution where the free response's columns are nearly
+// dependent: the fitted values, all that matters here, are then still the projection).
+Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixXd& free_rows) {
+  const long len = r.size(), rows = std::min<long>(len, free_rows.rows()), k = 1 + free_rows.cols();
+  Eigen::MatrixXd gram(k, k);
+  Eigen::VectorXd rhs(k);
+  gram(0, 0) = double(len);
+  rhs(0) = r.sum();
+  if (k > 1) {
+    const auto f = free_rows.topRows(rows);
+    gram.block(1, 1, k - 1, k - 1) = f.transpose() * f;
+    gram.block(0, 1, 1, k - 1) = f.colwise().sum();
+    gram.block(1, 0, k - 1, 1) = gram.block(0, 1, 1, k - 1).transpose();
+    rhs.tail(k - 1) = f.transpose() * r.head(rows);
+  }
+  Eigen::VectorXd scale = gram.diagonal().cwiseSqrt();
+  for (long i = 0; i < k; ++i) scale(i) = scale(i) > 0 ? 1.0 / scale(i) : 0.0;
+  const Eigen::MatrixXd g = scale.asDiagonal() * gram * scale.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(g);
+  const Eigen::VectorXd lambda = eig.eigenvalues();
+  const double cut = 1e-13 * lambda.cwiseAbs().maxCoeff();
+  const Eigen::VectorXd proj = eig.eigenvectors().transpose() * (scale.asDiagonal() * rhs);
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(k);
+  for (long i = 0; i < k; ++i)
+    if (lambda(i) > cut) z += eig.eigenvectors().col(i) * (proj(i) / lambda(i));
+  return scale.asDiagonal() * z;
 }
 
 }  // namespace
@@ -250,12 +283,13 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
                                                 : Eigen::MatrixXd(longest, 0);
   for (long j = 0; j < segments; ++j) {
     const long start = first + j * total / segments, len = first + (j + 1) * total / segments - start;
-    Eigen::MatrixXd m(len, 1 + free.cols());
-    m.col(0).setOnes();
-    if (free.cols() > 0) m.rightCols(free.cols()) = free.topRows(len);
     const Eigen::VectorXd r = record.y.segment(start, len) - y.segment(start, len);
-    const Eigen::VectorXd coef = m.colPivHouseholderQr().solve(r);
-    if (coef.allFinite()) y.segment(start, len) += m * coef;
+    const Eigen::VectorXd coef = OffsetAndStateFit(r, free);
+    if (coef.allFinite()) {
+      y.segment(start, len).array() += coef(0);
+      const long rows = std::min<long>(len, free.rows());
+      if (free.cols() > 0) y.segment(start, rows) += free.topRows(rows) * coef.tail(free.cols());
+    }
     if (nuisance && j == 0) {
       nuisance->output_offset = coef(0);
       nuisance->initial_state_rms =
@@ -350,6 +384,57 @@ std::vector<std::vector<double>> Starts(EffectKind kind, const Scales& s) {
     default:
       return {{}};
   }
+}
+
+std::vector<std::vector<double>> GridStarts(EffectKind kind, const Scales& s) {
+  std::vector<std::vector<double>> grid;
+  switch (kind) {
+    case EffectKind::kInputSaturation:
+    case EffectKind::kOutputSaturation: {
+      const bool in = kind == EffectKind::kInputSaturation;
+      const double* low = in ? s.u_low : s.y_low;
+      const double* high = in ? s.u_high : s.y_high;
+      const double span = in ? s.u_max : s.y_max;
+      // Each side: one of the tails, or beyond the data (that side does not clip).
+      std::vector<double> lo(low, low + 6), hi(high, high + 6);
+      lo.push_back(low[0] - 2 * span);
+      hi.push_back(high[0] + 2 * span);
+      for (double l : lo)
+        for (double h : hi)
+          if (h > l) grid.push_back({l, h});
+      break;
+    }
+    case EffectKind::kDeadZone:
+    case EffectKind::kBacklash:
+    case EffectKind::kCoulombFriction:
+      for (double f : {0.01, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.6}) grid.push_back({f * s.u_max});
+      break;
+    default:
+      break;
+  }
+  return grid;
+}
+
+std::vector<std::vector<double>> BestStarts(const FitContext& ctx, const CandidateSpec& spec,
+                                            const Eigen::VectorXd& prefix,
+                                            const std::vector<std::vector<double>>& starts, size_t keep) {
+  if (starts.size() <= keep) return starts;
+  const Candidate cand(*ctx.g0, spec, ctx.scales, ctx.options->substeps);
+  const Residuals residuals{&cand, ctx.estimation, ctx.n_est};
+  const size_t last = cand.Blocks() - 1;
+  std::vector<std::pair<double, size_t>> scored;
+  for (size_t i = 0; i < starts.size(); ++i) {
+    Eigen::VectorXd x0 = Eigen::VectorXd::Zero(cand.Size());
+    const long head = std::min<long>(prefix.size(), cand.BlockStart(last));
+    x0.head(head) = prefix.head(head);
+    if (cand.BlockSize(last) > 0) x0.segment(cand.BlockStart(last), cand.BlockSize(last)) = cand.Phi(last, starts[i]);
+    const double mse = Mse(residuals, x0);
+    scored.push_back({std::isfinite(mse) ? mse : INFINITY, i});
+  }
+  std::sort(scored.begin(), scored.end());
+  std::vector<std::vector<double>> best;
+  for (size_t i = 0; i < keep; ++i) best.push_back(starts[scored[i].second]);
+  return best;
 }
 
 // Candidate quantisation steps: the mean resultant length R(q) = |mean exp(2πi y/q)| is near 1

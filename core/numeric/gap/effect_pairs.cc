@@ -36,15 +36,16 @@ bool Compatible(EffectKind a, EffectKind b) {
 
 }  // namespace
 
-void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
-                        const std::vector<EffectKind>& kinds, GapReport& report) {
+PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
+                              const std::vector<EffectKind>& kinds) {
+  PairSearch out;
   const EffectKind k1 = first.spec.kinds.front();
   std::vector<EffectKind> seconds;
   for (EffectKind k : kinds)
     if (k != EffectKind::kNone && k != EffectKind::kParameterMismatch && Compatible(k1, k) &&
         (k != EffectKind::kOutputQuantization || ctx.q_strength >= kLatticeStrength))
       seconds.push_back(k);
-  if (seconds.empty()) return;
+  if (seconds.empty()) return out;
   const Candidate base(*ctx.g0, first.spec, ctx.scales, ctx.options->substeps);
   // A lighter polish than a single effect's (the first effect is already in place): the pair
   // search is most of the cost of a diagnosis otherwise.
@@ -75,7 +76,14 @@ void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, doubl
         const auto linear = LinearStarts(ctx, k2, base, first.x);
         starts.insert(starts.begin(), linear.begin(), linear.end());
       }
-      // Fewer starts than a single effect: the first effect is already in place.
+      // Fewer starts than a single effect: the first effect is already in place. The
+      // piecewise effects add a grid (limits over the tails of u or y, widths), and the three
+      // starts with the lowest cost at the start are fitted.
+      const auto grid = GridStarts(k2, ctx.scales);
+      if (!grid.empty()) {
+        starts.insert(starts.end(), grid.begin(), grid.end());
+        starts = BestStarts(pair_ctx, spec, prefix, starts, 3);
+      }
       if (starts.size() > 3) starts.resize(3);
       CandidateWork trial;
       FitSpec(pair_ctx, spec, {prefix}, starts, trial);
@@ -87,7 +95,6 @@ void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, doubl
 
   const GapOptions& options = *ctx.options;
   const CandidateFit& one = first.fit;
-  const CandidateWork* chosen = nullptr;
   double chosen_bic = std::min(one.bic, top_bic);
   for (CandidateWork& w : pairs) {
     CandidateFit& c = w.fit;
@@ -101,7 +108,11 @@ void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, doubl
             c.parameters * std::log(double(ctx.n_est));
     c.signature = Correlation(w.y_val - first.y_val, ctx.y_val - first.y_val);
     c.eligible = c.significant && c.signature >= options.min_signature;
-    if (c.eligible && c.bic < chosen_bic - options.ambiguity_bic) chosen = &w, chosen_bic = c.bic;
+    if (c.eligible && c.bic < chosen_bic - options.ambiguity_bic) {
+      out.kept = true;
+      out.pair = w;
+      chosen_bic = c.bic;
+    }
   }
   std::string tried;
   for (const CandidateWork& w : pairs) {
@@ -113,17 +124,10 @@ void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, doubl
                   c.likelihood_ratio, c.lr_threshold, c.signature, c.bic - one.bic);
     tried += line;
   }
-  GapVerdict& v = report.verdict;
-  if (!chosen) {
-    report.notes.push_back(std::string("second effect after ") + EffectName(k1) +
-                           ": none passes (" + tried + ")");
-    return;
-  }
-  const CandidateFit& c = chosen->fit;
-  v.effect = EffectName(k1);
-  AdoptCandidate(c, v);
-  report.notes.push_back(std::string("second effect after ") + EffectName(k1) + ": " +
-                         EffectName(c.effects[1].kind) + " kept (" + tried + ")");
+  out.note = std::string("second effect after ") + EffectName(k1) + ": " +
+             (out.kept ? std::string(EffectName(out.pair.fit.effects[1].kind)) + " kept" : "none passes") +
+             " (" + tried + ")";
+  return out;
 }
 
 }  // namespace idrig::gap_detail

@@ -24,6 +24,10 @@ struct Scales {
   double lag_of_best_match = 0;  // [s] shift of G0's output that best matches y (cross-correlation)
   double u_quantile[5] = {0, 0, 0, 0, 0};  // 2, 15, 50, 85, 98 %
   double y_quantile[4] = {0, 0, 0, 0};     // 0.5, 2, 98, 99.5 %
+  // Tails for the grid starts of limits: quantiles kTailShares of u and of y (y less the refit's
+  // output offset), low side and high side (1 − share).
+  static constexpr double kTailShares[6] = {0.001, 0.01, 0.03, 0.07, 0.15, 0.3};
+  double u_low[6] = {}, u_high[6] = {}, y_low[6] = {}, y_high[6] = {};
 };
 
 // What a candidate contains: 0–2 effects (kNone / kParameterMismatch carry no parameters), each
@@ -202,13 +206,28 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w);
 // Sorts `work` best first (eligible, then validation BIC) and returns the ranking.
 std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const GapOptions& options);
 
-// effect_pairs.cc: forward selection of a second effect after `first` (the top single effect),
-// each other effect added to it and refitted together; kept when it passes the significance,
-// signature and validation-BIC rules against `first`. Updates report.verdict.
-// The pair must also beat `top_bic` (the best single candidate's validation BIC); when kept,
-// the verdict becomes the pair (verdict.effect = the first effect).
-void SelectSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
-                        const std::vector<EffectKind>& kinds, GapReport& report);
+// effect_pairs.cc: forward selection of a second effect after `first` (an eligible single
+// effect), each other effect added to it and refitted together; a pair is kept when it passes
+// the significance, signature and validation-BIC rules against `first` and beats `top_bic` (the
+// best single candidate's validation BIC) by the ambiguity margin; the best kept pair is
+// returned, with a note listing every pair tried.
+struct PairSearch {
+  bool kept = false;
+  CandidateWork pair;  // when kept: effects = {first's, the second}
+  std::string note;
+};
+// Grid starts of the piecewise effects (limits, dead zone, backlash, friction), whose cost has
+// no gradient where no sample reaches the break: a coarse grid over the tails of u or y (both
+// limits, or one), or over widths; physical units. Empty for the other effects.
+std::vector<std::vector<double>> GridStarts(EffectKind kind, const Scales& s);
+// The `keep` starts with the lowest estimation MSE when the last block of `spec` starts there and
+// the rest at `prefix` (one simulation each, no fit).
+std::vector<std::vector<double>> BestStarts(const FitContext& ctx, const CandidateSpec& spec,
+                                            const Eigen::VectorXd& prefix,
+                                            const std::vector<std::vector<double>>& starts, size_t keep);
+
+PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
+                              const std::vector<EffectKind>& kinds);
 
 // linear_order.cc: a linear model of order n0 + 2 against the best single candidate `top`; when
 // it wins, sets the verdict to unmodelled_dynamics (plant = *higher) and returns true.

@@ -281,6 +281,10 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
                                           std::abs(*std::min_element(all_y.begin(), all_y.end()))));
   const double uq[5] = {0.02, 0.15, 0.5, 0.85, 0.98};
   for (int i = 0; i < 5; ++i) scales.u_quantile[i] = Quantile(all_u, uq[i]);
+  for (int i = 0; i < 6; ++i) {
+    scales.u_low[i] = Quantile(all_u, Scales::kTailShares[i]);
+    scales.u_high[i] = Quantile(all_u, 1 - Scales::kTailShares[i]);
+  }
   const double yq[4] = {0.005, 0.02, 0.98, 0.995};
   for (int i = 0; i < 4; ++i) scales.y_quantile[i] = Quantile(all_y, yq[i]);
 
@@ -348,6 +352,10 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     for (double v : centred) y_max = std::max(y_max, std::abs(v));
     scales.y_max = std::max(1e-12, y_max);
     for (int i = 0; i < 4; ++i) scales.y_quantile[i] = Quantile(centred, yq[i]);
+    for (int i = 0; i < 6; ++i) {
+      scales.y_low[i] = Quantile(centred, Scales::kTailShares[i]);
+      scales.y_high[i] = Quantile(centred, 1 - Scales::kTailShares[i]);
+    }
   }
   {
     // Lag that best aligns G0's output with the measured one (a delay's natural start).
@@ -471,16 +479,50 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   }
   // A second effect, by forward selection (effect_pairs.cc), from the best eligible effect —
   // also when parameter_mismatch tops the ranking: two effects together can leave a linear
-  // refit as the best single explanation.
+  // refit as the best single explanation. Two effects that each explain part of the gap can
+  // rank the wrong one first (backlash ahead of friction when friction comes with a
+  // saturation), so while the best pair so far still leaves the validation records above the
+  // independent noise floor, the search goes on from the next eligible effect (up to three
+  // firsts); the pair with the lowest validation BIC is kept.
   if (!unmodelled && v.effect != "ambiguous" && top.effect.kind != EffectKind::kNone &&
       options.second_effect) {
-    const CandidateWork* first = nullptr;
-    for (const CandidateWork& w : work)
-      if (w.fit.eligible && !w.fit.effects.empty()) {
-        first = &w;
+    // Nothing is left for a second effect when a fit already simulates the validation records
+    // within the independent noise floor (its MSE within two standard deviations of a χ²_N
+    // sample variance, σ²(1 + 2√(2/N))).
+    const bool floor_known = floor.method != "best_candidate_residual";
+    const double floor_mse = floor.sigma * floor.sigma * (1 + 2 * std::sqrt(2.0 / n_val));
+    auto within_floor = [&](double mse) { return floor_known && mse <= floor_mse; };
+    PairSearch best;
+    int searched = 0;
+    for (const CandidateWork& w : work) {
+      if (!w.fit.eligible || w.fit.effects.empty()) continue;
+      if (searched == 0 && within_floor(w.fit.validation_mse)) {
+        char line[240];
+        std::snprintf(line, sizeof line,
+                      "second effect after %s: not searched, its validation MSE %.4g is within "
+                      "the noise floor %.4g (%s)",
+                      EffectName(w.fit.effects.front().kind), w.fit.validation_mse,
+                      floor.sigma * floor.sigma, floor.method.c_str());
+        report.notes.push_back(line);
         break;
       }
-    if (first) SelectSecondEffect(ctx, *first, top.bic, kinds, report);
+      if (searched > 0 && (!floor_known || searched == 3 ||
+                           (best.kept && within_floor(best.pair.fit.validation_mse))))
+        break;
+      PairSearch trial = SearchSecondEffect(ctx, w, top.bic, kinds);
+      report.notes.push_back(trial.note);
+      ++searched;
+      if (trial.kept && (!best.kept || trial.pair.fit.bic < best.pair.fit.bic)) best = std::move(trial);
+    }
+    if (best.kept) {
+      const CandidateFit& c = best.pair.fit;
+      v.effect = EffectName(c.effects.front().kind);
+      AdoptCandidate(c, v);
+      if (searched > 1)
+        report.notes.push_back(std::string("pair kept: ") + EffectName(c.effects[0].kind) + " with " +
+                               EffectName(c.effects[1].kind) + " (lowest validation BIC over " +
+                               std::to_string(searched) + " first effects)");
+    }
   }
   std::vector<GapRecord> all_records = estimation;
   all_records.insert(all_records.end(), validation.begin(), validation.end());

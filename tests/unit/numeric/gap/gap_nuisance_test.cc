@@ -56,6 +56,8 @@ TEST_P(OffsetTest, OffsetsAreNuisanceNotAnEffect) {
               v.nuisance.output_offset.empty() ? NAN : v.nuisance.output_offset[0], v.nrmse_before,
               v.nrmse_after);
   EXPECT_EQ(v.effect, EffectName(c.truth));
+  // One effect withheld, one named: no second effect made of the offsets.
+  if (c.truth != EffectKind::kNone) EXPECT_EQ(v.effects.size(), 1u);
   ASSERT_EQ(v.nuisance.output_offset.size(), 1u);
   if (c.truth == EffectKind::kNone) {
     // Offsets only: the nuisance absorbs them (du ≡ dy/G0(0) before a linear stable plant).
