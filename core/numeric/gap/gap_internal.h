@@ -214,7 +214,7 @@ std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const
 struct PairSearch {
   bool kept = false;
   CandidateWork pair;  // when kept: effects = {first's, the second}
-  std::string note;
+  std::string note, lean_note;
 };
 // Grid starts of the piecewise effects (limits, dead zone, backlash, friction), whose cost has
 // no gradient where no sample reaches the break: a coarse grid over the tails of u or y (both
