@@ -130,6 +130,10 @@ void RunBench(const BenchSettings& b) {
                           {"combo_top1_either", s.combo_top1_rate},
                           {"median_shrink_correct", s.median_shrink_correct},
                           {"mean_seconds", s.mean_seconds},
+                          {"decidable_single_cases", s.decidable_single_cases},
+                          {"top1_decidable", s.top1_decidable},
+                          {"decidable_combo_cases", s.decidable_combo_cases},
+                          {"combo_both_decidable", s.combo_both_decidable},
                           {"confusion", s.confusion}};
     for (const auto& [kind, counts] : s.by_excitation)
       out["top1_by_excitation"][kind] = double(counts.first) / counts.second;
@@ -147,6 +151,10 @@ void RunBench(const BenchSettings& b) {
   if (s.combo_cases)
     std::cout << "two-effect cases: both named " << Rate(s.combo_both, s.combo_cases)
               << ", top-1 one of the two " << Rate(s.combo_either, s.combo_cases) << "\n";
+  std::cout << "without the undecidable cases (an input saturation, dead zone or backlash under a "
+               "two-valued input): top-1 "
+            << Rate(s.decidable_single_correct, s.decidable_single_cases) << ", both named "
+            << Rate(s.decidable_combo_both, s.decidable_combo_cases) << "\n";
   std::cout << "median validated shrink (right effect) " << s.median_shrink_correct << "\n"
             << "mean time per diagnosis " << s.mean_seconds << " s\n";
   for (const auto& [kind, counts] : s.by_excitation)

@@ -366,6 +366,20 @@ GapBenchScore ScoreGapBench(const std::vector<GapBenchOutcome>& outcomes) {
     const std::vector<std::string> named = o.effects.empty() ? std::vector<std::string>{o.verdict} : o.effects;
     ++s.confusion[Label(truth)][Label(named)];
     auto has = [&](const std::string& n) { return std::find(named.begin(), named.end(), n) != named.end(); };
+    const bool two_valued = o.excitation == "prbs" || o.excitation == "rbs";
+    bool decidable = true;
+    for (EffectKind k : o.truth)
+      if (two_valued && (k == EffectKind::kInputSaturation || k == EffectKind::kDeadZone ||
+                         k == EffectKind::kBacklash))
+        decidable = false;
+    if (decidable && truth.size() == 1) {
+      ++s.decidable_single_cases;
+      if (o.verdict == truth[0]) ++s.decidable_single_correct;
+    }
+    if (decidable && truth.size() == 2) {
+      ++s.decidable_combo_cases;
+      if (has(truth[0]) && has(truth[1])) ++s.decidable_combo_both;
+    }
     if (truth.size() == 1) {
       ++s.single_cases;
       ++s.by_excitation[o.excitation].second;
@@ -397,6 +411,8 @@ GapBenchScore ScoreGapBench(const std::vector<GapBenchOutcome>& outcomes) {
   s.combo_both_rate = s.combo_cases ? double(s.combo_both) / s.combo_cases : 0.0;
   s.combo_top1_rate = s.combo_cases ? double(s.combo_either) / s.combo_cases : 0.0;
   s.mean_seconds = s.cases ? seconds / s.cases : 0.0;
+  s.top1_decidable = s.decidable_single_cases ? double(s.decidable_single_correct) / s.decidable_single_cases : 0.0;
+  s.combo_both_decidable = s.decidable_combo_cases ? double(s.decidable_combo_both) / s.decidable_combo_cases : 0.0;
   return s;
 }
 

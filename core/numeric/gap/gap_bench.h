@@ -96,6 +96,13 @@ struct GapBenchScore {
   double false_alarm_rate = 0; // false_alarms / none_cases
   double combo_both_rate = 0, combo_top1_rate = 0;
   double median_shrink_correct = 0;  // over single cases with the right verdict (not none)
+  // The same scores without the cases no data can decide: a two-valued input (prbs, rbs) with
+  // an input saturation, dead zone or backlash withheld — any static map of a two-valued signal
+  // is affine, i.e. a gain and an offset, which the refitted G0 and the output offset absorb
+  // (the honest verdict there is `ambiguous`).
+  int decidable_single_cases = 0, decidable_single_correct = 0;
+  int decidable_combo_cases = 0, decidable_combo_both = 0;
+  double top1_decidable = 0, combo_both_decidable = 0;
   double mean_seconds = 0;
   // rows: the truth ("a" or "a+b"); columns: the named effects ("x" or "x+y") with counts.
   std::map<std::string, std::map<std::string, int>> confusion;

@@ -118,6 +118,13 @@ TEST(GapBenchTest, ScoresCountBothNamedOrderFreeAndTopOneAsEitherOfThePair) {
   EXPECT_DOUBLE_EQ(s.combo_both_rate, 1.0 / 3);
   EXPECT_EQ(s.confusion.at("backlash+output_quantization").at("output_quantization+backlash"), 1);
   EXPECT_EQ(s.by_pair.at("backlash+output_quantization").first, 1);
+  // Undecidable: backlash or a dead zone under a two-valued input (o[4], o[5]); o[1], o[2]
+  // (none under prbs) stay decidable.
+  EXPECT_EQ(s.decidable_single_cases, 3);
+  EXPECT_EQ(s.decidable_single_correct, 2);
+  EXPECT_EQ(s.decidable_combo_cases, 1);
+  EXPECT_EQ(s.decidable_combo_both, 1);
+  EXPECT_DOUBLE_EQ(s.combo_both_decidable, 1.0);
 }
 
 TEST(GapBenchTest, BadPairsAndSharesAreNamed) {
