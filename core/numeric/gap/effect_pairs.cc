@@ -40,10 +40,18 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
                               const std::vector<EffectKind>& kinds) {
   PairSearch out;
   const EffectKind k1 = first.spec.kinds.front();
+  // Under a two-valued input (PRBS, random binary) an input saturation, dead zone or backlash
+  // is a gain and an offset, which the refitted plant and the output offset already hold: as a
+  // second effect it could only absorb a small misfit of the first, so it is not tried.
+  const bool two_valued = BinaryInput(*ctx.estimation) && BinaryInput(*ctx.validation);
+  auto input_static = [](EffectKind k) {
+    return k == EffectKind::kInputSaturation || k == EffectKind::kDeadZone || k == EffectKind::kBacklash;
+  };
   std::vector<EffectKind> seconds;
   for (EffectKind k : kinds)
     if (k != EffectKind::kNone && k != EffectKind::kParameterMismatch && Compatible(k1, k) &&
-        (k != EffectKind::kOutputQuantization || ctx.q_strength >= kLatticeStrength))
+        (k != EffectKind::kOutputQuantization || ctx.q_strength >= kLatticeStrength) &&
+        !(two_valued && input_static(k)))
       seconds.push_back(k);
   if (seconds.empty()) return out;
   const Candidate base(*ctx.g0, first.spec, ctx.scales, ctx.options->substeps);
@@ -143,7 +151,10 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   }
   out.note = std::string("second effect after ") + EffectName(k1) + ": " +
              (out.kept ? std::string(EffectName(out.pair.fit.effects[1].kind)) + " kept" : "none passes") +
-             " (" + tried + ")" + (out.lean_note.empty() ? "" : "; " + out.lean_note);
+             " (" + tried + ")" + (out.lean_note.empty() ? "" : "; " + out.lean_note) +
+             (two_valued ? "; input saturation, dead zone and backlash not tried: the input takes two "
+                           "values, on which they act as a gain and an offset"
+                         : "");
   return out;
 }
 
