@@ -452,7 +452,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     v.explanation = "no candidate explains the gap better than noise: G0 fits within the noise";
   else if (v.effect == "unmodelled_dynamics")
     v.explanation = "the linear part lacks dynamics: a linear model of order " +
-                    std::to_string(v.linear_order) + " beats every single effect (validation NRMSE " +
+                    std::to_string(v.linear_order) + " beats every linear explanation (validation NRMSE " +
                     std::to_string(v.linear_nrmse_after) + ")" +
                     (v.effects.empty() ? std::string("; no static effect remains after it")
                                        : "; after it, " + std::string(EffectName(v.effects[0].kind)) +
