@@ -70,23 +70,27 @@ Rig TwoMassRig(uint64_t seed, double wz_over_w0 = 1.3) {
   return rig;
 }
 
-void Record(const Rig& rig, const Effect& effect, std::mt19937_64& rng, GapRecord& r) {
-  EffectSimulationOptions fine;
-  fine.substeps = 16;
-  r.y = SimulateWithEffect(rig.real, effect, r.u, r.sample_time, fine);
-  std::normal_distribution<double> noise(0.0, Rms(r.y.array() - r.y.mean()) * std::pow(10.0, -30.0 / 20));
-  for (long k = 0; k < r.y.size(); ++k) r.y(k) += noise(rng);
-}
-
-TEST(GapLinearOrderTest, MissingAntiResonanceThenASensorMapIsUnmodelledDynamicsThenTheMap) {
-  Rig rig = TwoMassRig(401);
-  std::mt19937_64 rng(402);
+// The two-mass rig (seed 401) read through y + a2 y² + a3 y³, the terms `quadratic` and `cubic`
+// of y at max|y|; 30 dB output noise from `noise_seed`; 16 sub-steps.
+Rig SensorRig(double wz_over_w0, double quadratic, double cubic, uint64_t noise_seed) {
+  Rig rig = TwoMassRig(401, wz_over_w0);
+  std::mt19937_64 rng(noise_seed);
   const Eigen::VectorXd y_lin =
       SimulateWithEffect(rig.real, Effect{}, rig.c.estimation.u, rig.c.estimation.sample_time);
   const double y_max = y_lin.cwiseAbs().maxCoeff();
-  // y_meas = y + a2 y² + a3 y³: 15 % and −10 % of y at max|y|.
-  const Effect sensor{EffectKind::kSensorNonlinearity, {1.0, 0.15 / y_max, -0.1 / (y_max * y_max), 0.0}};
-  for (GapRecord* r : {&rig.c.estimation, &rig.c.validation}) Record(rig, sensor, rng, *r);
+  const Effect sensor{EffectKind::kSensorNonlinearity, {1.0, quadratic / y_max, cubic / (y_max * y_max), 0.0}};
+  EffectSimulationOptions fine;
+  fine.substeps = 16;
+  for (GapRecord* r : {&rig.c.estimation, &rig.c.validation}) {
+    r->y = SimulateWithEffect(rig.real, sensor, r->u, r->sample_time, fine);
+    std::normal_distribution<double> noise(0.0, Rms(r->y.array() - r->y.mean()) * std::pow(10.0, -30.0 / 20));
+    for (long k = 0; k < r->y.size(); ++k) r->y(k) += noise(rng);
+  }
+  return rig;
+}
+
+TEST(GapLinearOrderTest, MissingAntiResonanceThenASensorMapIsUnmodelledDynamicsThenTheMap) {
+  const Rig rig = SensorRig(1.3, 0.15, -0.1, 402);
   const GapReport report = DiagnoseGap(rig.c.sim, {rig.c.estimation}, {rig.c.validation});
   PrintReport(report);
   const GapVerdict& v = report.verdict;
@@ -103,13 +107,7 @@ TEST(GapLinearOrderTest, MildMissingDynamicsUnderAStrongSensorMapStillGoesToTheL
   // map stronger (40 % and −25 % at max|y|): a static effect on G0 now beats the higher-order
   // linear part alone, yet the linear part lacks dynamics — the map must be named on the fixed
   // linear part, not next to a lag or a resonance standing in for it.
-  Rig rig = TwoMassRig(401, 1.85);
-  std::mt19937_64 rng(404);
-  const Eigen::VectorXd y_lin =
-      SimulateWithEffect(rig.real, Effect{}, rig.c.estimation.u, rig.c.estimation.sample_time);
-  const double y_max = y_lin.cwiseAbs().maxCoeff();
-  const Effect sensor{EffectKind::kSensorNonlinearity, {1.0, 0.4 / y_max, -0.25 / (y_max * y_max), 0.0}};
-  for (GapRecord* r : {&rig.c.estimation, &rig.c.validation}) Record(rig, sensor, rng, *r);
+  const Rig rig = SensorRig(1.85, 0.4, -0.25, 404);
   const GapReport report = DiagnoseGap(rig.c.sim, {rig.c.estimation}, {rig.c.validation});
   PrintReport(report);
   const GapVerdict& v = report.verdict;
@@ -123,13 +121,7 @@ TEST(GapLinearOrderTest, MildMissingDynamicsUnderAStrongSensorMapStillGoesToTheL
 TEST(GapLinearOrderTest, AdequateLinearPartWithASensorMapIsTheMapNotUnmodelledDynamics) {
   // The same rig, with the sim model of the right order: nothing for the linear-order check to
   // find, the verdict is the map.
-  Rig rig = TwoMassRig(401);
-  std::mt19937_64 rng(403);
-  const Eigen::VectorXd y_lin =
-      SimulateWithEffect(rig.real, Effect{}, rig.c.estimation.u, rig.c.estimation.sample_time);
-  const double y_max = y_lin.cwiseAbs().maxCoeff();
-  const Effect sensor{EffectKind::kSensorNonlinearity, {1.0, 0.15 / y_max, -0.1 / (y_max * y_max), 0.0}};
-  for (GapRecord* r : {&rig.c.estimation, &rig.c.validation}) Record(rig, sensor, rng, *r);
+  const Rig rig = SensorRig(1.3, 0.15, -0.1, 403);
   const GapReport report = DiagnoseGap(rig.real, {rig.c.estimation}, {rig.c.validation});
   PrintReport(report);
   EXPECT_EQ(report.verdict.effect, "sensor_nonlinearity");
