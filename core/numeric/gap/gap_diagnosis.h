@@ -127,8 +127,9 @@ struct GapNuisance {
 
 struct GapVerdict {
   // An effect name, "ambiguous", or "unmodelled_dynamics" (the linear part lacks dynamics: a
-  // higher-order linear model beats every single effect; `effects` then holds what a second
-  // diagnosis on that model finds, if any).
+  // higher-order linear model beats every single effect — or every linear one, and with the
+  // static effect a second diagnosis on it finds, every single effect; `effects` then holds what
+  // that second diagnosis finds, if any).
   std::string effect;
   std::vector<std::string> tied; // the two candidates when ambiguous
   double confidence = 0;         // BIC weight of the verdict among all candidates

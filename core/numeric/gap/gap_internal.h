@@ -229,10 +229,11 @@ std::vector<std::vector<double>> BestStarts(const FitContext& ctx, const Candida
 PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
                               const std::vector<EffectKind>& kinds);
 
-// linear_order.cc: a linear model of order n0 + 2 against the best single candidate `top`; when
-// it wins, sets the verdict to unmodelled_dynamics (plant = *higher) and returns true.
-bool TestUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, GapReport& report,
-                            TransferFunction* higher);
+// linear_order.cc: a linear model of order n0 + 2 against the best single candidate `top` (and
+// against the linear candidates of the ranking); when it wins, the diagnosis runs again on it,
+// the verdict becomes unmodelled_dynamics with the static effect(s) found there, and it returns
+// true.
+bool DiagnoseUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, GapReport& report);
 
 // The verdict takes the candidate's effects, their 1σ, plant, validation NRMSE and nuisance.
 void AdoptCandidate(const CandidateFit& c, GapVerdict& v);

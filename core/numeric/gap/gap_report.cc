@@ -451,32 +451,9 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
           "mismatch; excite at several amplitudes to separate them");
     }
   }
-  // The linear part itself (linear_order.cc); then the diagnosis again on the fixed linear part.
-  TransferFunction higher;
+  // The linear part itself, and the diagnosis again on the fixed linear part (linear_order.cc).
   const bool unmodelled = options.check_linear_order && v.effect != "none" && v.effect != "ambiguous" &&
-                          TestUnmodelledDynamics(ctx, top, report, &higher);
-  if (unmodelled) {
-    GapOptions inner = options;
-    inner.check_linear_order = false;
-    try {
-      const GapReport after = DiagnoseGap(higher, estimation, validation, inner);
-      const GapVerdict& a = after.verdict;
-      if (!a.effects.empty() && a.effect != "ambiguous" && a.effect != "parameter_mismatch") {
-        v.effects = a.effects;
-        v.effects_std = a.effects_std;
-        v.params = a.params;
-        v.param_std = a.param_std;
-        v.plant = a.plant;
-        v.nrmse_after = a.nrmse_after;
-        v.nuisance = a.nuisance;
-        v.nuisance.initial_state = after.verdict.nuisance.initial_state;
-      }
-      report.notes.push_back("after the linear part is fixed (order " + std::to_string(v.linear_order) +
-                             "): " + a.effect + ", validation NRMSE " + std::to_string(a.nrmse_after));
-    } catch (const std::exception& e) {
-      report.notes.push_back(std::string("diagnosis on the higher-order linear part failed: ") + e.what());
-    }
-  }
+                          DiagnoseUnmodelledDynamics(ctx, top, report);
   // A second effect, by forward selection (effect_pairs.cc), from the best eligible effect —
   // also when parameter_mismatch tops the ranking: two effects together can leave a linear
   // refit as the best single explanation. Two effects that each explain part of the gap can
@@ -533,7 +510,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     v.explanation = "no candidate explains the gap better than noise: G0 fits within the noise";
   else if (v.effect == "unmodelled_dynamics")
     v.explanation = "the linear part lacks dynamics: a linear model of order " +
-                    std::to_string(v.linear_order) + " beats every single effect (validation NRMSE " +
+                    std::to_string(v.linear_order) + " beats every linear explanation (validation NRMSE " +
                     std::to_string(v.linear_nrmse_after) + ")" +
                     (v.effects.empty() ? std::string("; no static effect remains after it")
                                        : "; after it, " + std::string(EffectName(v.effects[0].kind)) +

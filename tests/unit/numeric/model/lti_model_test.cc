@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <complex>
+#include <vector>
 
 namespace idrig {
 namespace {
@@ -62,6 +64,32 @@ TEST(LtiModel, ContinuousImpulseSamplesAreClosedForm) {
   for (int k = 0; k < 30; ++k) {
     const double t = k * 0.05;
     EXPECT_NEAR(g[k](0, 0), std::exp(-0.2 * t) * std::sin(2.0 * t) / 2.0, kTight);
+  }
+}
+
+TEST(LtiModel, ZohOfAHighOrderModelAtAHighSampleRateIsExact) {
+  // Sixth order at 51.2 kHz (the Wiener–Hammerstein benchmark's rate): denominator
+  // coefficients up to 1e25, where the matrix exponential of the companion realisation without
+  // balancing came out Φ = 0. W(s) = Π(−p_i)/Π(s − p_i) (unit DC gain), step response
+  // y(t) = 1 + Σ r_i/p_i e^{p_i t}, r_i = Π_j(−p_j)/Π_{j≠i}(p_i − p_j): a closed form.
+  using C = std::complex<double>;
+  const std::vector<C> p = {C(-5e4, 0), C(-9e3, 0), C(-6e3, 1e4), C(-6e3, -1e4), C(-2.5e3, 9e3), C(-2.5e3, -9e3)};
+  Eigen::VectorXcd roots(6);
+  C gain = 1;
+  for (int i = 0; i < 6; ++i) roots(i) = p[i], gain *= -p[i];
+  TransferFunction tf{Eigen::VectorXd::Constant(1, gain.real()), PolynomialFromRoots(roots)};
+  ASSERT_GT(tf.den.maxCoeff(), 1e24);
+  const double ts = 1.0 / 51200;
+  const Eigen::MatrixXd y = StepResponse(ToStateSpace(tf), ts, 200);
+  for (int k = 0; k < 200; ++k) {
+    C exact = 1;
+    for (int i = 0; i < 6; ++i) {
+      C r = gain;
+      for (int j = 0; j < 6; ++j)
+        if (j != i) r /= p[i] - p[j];
+      exact += r / p[i] * std::exp(p[i] * (k * ts));
+    }
+    EXPECT_NEAR(y(k, 0), exact.real(), 1e-8) << "sample " << k;
   }
 }
 
