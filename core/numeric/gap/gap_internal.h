@@ -229,11 +229,22 @@ std::vector<std::vector<double>> BestStarts(const FitContext& ctx, const Candida
 PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
                               const std::vector<EffectKind>& kinds);
 
-// linear_order.cc: a linear model of order n0 + 2 against the best single candidate `top` (and
-// against the linear candidates of the ranking); when it wins, the diagnosis runs again on it,
-// the verdict becomes unmodelled_dynamics with the static effect(s) found there, and it returns
-// true.
-bool DiagnoseUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, GapReport& report);
+// linear_order.cc: a linear model of order n0 + 2 (passing the LR and signature tests against
+// the refit) against the best single candidate `top` (wins) and against the linear candidates of
+// the ranking (beats_linear).
+struct LinearOrderCheck {
+  bool wins = false, beats_linear = false;
+  double linear_delta_bic = 0;  // its validation BIC less the best linear candidate's
+  TransferFunction plant;
+  int order = 0;
+  double nrmse = 0;             // its validation NRMSE
+};
+LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top, GapReport& report);
+// The diagnosis again on check.plant; the verdict becomes unmodelled_dynamics with the static
+// effect(s) found there (returns true) — when check.wins, or else when that beats the validation
+// BIC of the verdict so far (`top`, or the pair kept after it).
+bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, const CandidateFit& top,
+                      GapReport& report);
 
 // The verdict takes the candidate's effects, their 1σ, plant, validation NRMSE and nuisance.
 void AdoptCandidate(const CandidateFit& c, GapVerdict& v);

@@ -452,8 +452,10 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     }
   }
   // The linear part itself, and the diagnosis again on the fixed linear part (linear_order.cc).
-  const bool unmodelled = options.check_linear_order && v.effect != "none" && v.effect != "ambiguous" &&
-                          DiagnoseUnmodelledDynamics(ctx, top, report);
+  const LinearOrderCheck linear = options.check_linear_order && v.effect != "none" && v.effect != "ambiguous"
+                                      ? CheckLinearOrder(ctx, top, report)
+                                      : LinearOrderCheck{};
+  bool unmodelled = linear.wins && AdoptHigherOrder(ctx, linear, top, report);
   // A second effect, by forward selection (effect_pairs.cc), from the best eligible effect —
   // also when parameter_mismatch tops the ranking: two effects together can leave a linear
   // refit as the best single explanation. Two effects that each explain part of the gap can
@@ -501,6 +503,12 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
                                std::to_string(searched) + " first effects)");
     }
   }
+  // A static effect on G0 was better than the higher-order linear part alone, and no second
+  // static effect explains the rest (no pair, or a lag/resonance/delay standing in for missing
+  // dynamics): does the higher-order part with the static effect(s) found on it beat that?
+  if (!unmodelled && linear.beats_linear && v.effect != "ambiguous" &&
+      (v.effects.size() < 2 || IsLinearEffect(v.effects[1].kind)))
+    unmodelled = AdoptHigherOrder(ctx, linear, top, report);
   std::vector<GapRecord> all_records = estimation;
   all_records.insert(all_records.end(), validation.begin(), validation.end());
   const OutputLattice lattice = DetectOutputLattice(all_records, ctx.q_step, floor.sigma);

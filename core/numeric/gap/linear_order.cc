@@ -29,7 +29,26 @@ Eigen::VectorXd Multiply(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 
 }  // namespace
 
-bool DiagnoseUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, GapReport& report) {
+namespace {
+
+// Validation BIC of a verdict with one or two effects: N_val ln V_val + k ln N_est, V_val from
+// its validation NRMSE, k = the first candidate's parameters plus the second effect's.
+double VerdictBic(const FitContext& ctx, const GapVerdict& v, int first_parameters) {
+  const double spread2 = (ctx.y_val.array() - ctx.y_val.mean()).square().sum() / ctx.n_val;
+  const double mse = v.nrmse_after * v.nrmse_after * spread2;
+  int k = first_parameters;
+  if (v.effects.size() > 1) {
+    const Effect& second = v.effects[1];
+    const bool absolute =
+        second.kind == EffectKind::kSensorNonlinearity && second.params.size() > 3 && second.params[3] != 0;
+    k += Candidate::NumEffectParams(second.kind, absolute ? std::vector<double>{1.0} : std::vector<double>{});
+  }
+  return ctx.n_val * std::log(std::max(mse, 1e-300)) + k * std::log(double(ctx.n_est));
+}
+
+}  // namespace
+
+LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top, GapReport& report) {
   const GapOptions& options = *ctx.options;
   const int n0 = ctx.g0->Order();
   const int order = n0 + 2;
@@ -117,58 +136,57 @@ bool DiagnoseUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, 
                 n0, order, lr, threshold, signature, nrmse, bic - top.bic, EffectName(top.effect.kind),
                 starts.size(), best_start.c_str(), evaluations);
   report.notes.push_back(line);
-  if (!(lr > threshold && signature >= options.min_signature)) return false;
+  LinearOrderCheck check;
+  if (!(lr > threshold && signature >= options.min_signature)) return check;
   // Two ways to win. (a) The higher-order linear part alone beats every single candidate.
   // (b) It beats every linear explanation (the refit, a delay, a lag, a resonance: the linear
   // part lacks dynamics) but a static effect on G0 is better still, because the rig has both:
-  // then the diagnosis on the higher-order part (below) decides — the linear part with the
-  // static effect it finds must beat the best single candidate's validation BIC too. Without
-  // (b) the verdict spends itself on the static effect plus a lag or a resonance standing in
-  // for the missing dynamics.
-  const bool beats_top = bic < top.bic - options.ambiguity_bic;
+  // then, after the pair search, AdoptHigherOrder decides (gap_internal.h).
   double linear_bic = INFINITY;
   for (const CandidateFit& c : report.ranking)
     if (c.effects.size() <= 1 && (c.effect.kind == EffectKind::kParameterMismatch || IsLinearEffect(c.effect.kind)) &&
         (c.eligible || c.effect.kind == EffectKind::kParameterMismatch))
       linear_bic = std::min(linear_bic, c.bic);
-  const bool beats_linear = bic < linear_bic - options.ambiguity_bic;
-  if (!beats_top && !beats_linear) return false;
-  const TransferFunction higher = cand.Plant(f.x);
+  check.wins = bic < top.bic - options.ambiguity_bic;
+  check.beats_linear = bic < linear_bic - options.ambiguity_bic;
+  check.linear_delta_bic = bic - linear_bic;
+  check.plant = cand.Plant(f.x);
+  check.order = order;
+  check.nrmse = nrmse;
+  return check;
+}
 
-  GapOptions inner_options = options;
+bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, const CandidateFit& top,
+                      GapReport& report) {
+  GapVerdict& v = report.verdict;
+  const bool compare = !check.wins;
+  // The verdict so far: the top single candidate, or the pair kept after it.
+  const double current_bic = compare ? VerdictBic(ctx, v, top.parameters) : 0;
+  const std::string current = v.effects.size() > 1 ? v.effect + " + " + EffectName(v.effects[1].kind) : v.effect;
+  GapOptions inner_options = *ctx.options;
   inner_options.check_linear_order = false;
   GapReport after;
   try {
-    after = DiagnoseGap(higher, *ctx.estimation, *ctx.validation, inner_options);
+    after = DiagnoseGap(check.plant, *ctx.estimation, *ctx.validation, inner_options);
   } catch (const std::exception& e) {
     report.notes.push_back(std::string("diagnosis on the higher-order linear part failed: ") + e.what());
-    if (!beats_top) return false;
+    if (compare) return false;
   }
   const GapVerdict& a = after.verdict;
   const bool found = !a.effects.empty() && a.effect != "ambiguous" && a.effect != "parameter_mismatch" &&
                      a.effect != "none" && !after.ranking.empty();
-  if (!beats_top) {
+  if (compare) {
     if (!found) return false;
-    // Validation BIC of the higher-order part with its effect(s), as every candidate's.
-    const double spread2 = (ctx.y_val.array() - ctx.y_val.mean()).square().sum() / ctx.n_val;
-    const double mse = a.nrmse_after * a.nrmse_after * spread2;
-    int k = after.ranking.front().parameters;
-    if (a.effects.size() > 1) {
-      const Effect& second = a.effects[1];
-      const bool absolute = second.kind == EffectKind::kSensorNonlinearity && second.params.size() > 3 &&
-                            second.params[3] != 0;
-      k += Candidate::NumEffectParams(second.kind, absolute ? std::vector<double>{1.0} : std::vector<double>{});
-    }
-    const double inner_bic = ctx.n_val * std::log(std::max(mse, 1e-300)) + k * std::log(double(ctx.n_est));
+    const double inner_bic = VerdictBic(ctx, a, after.ranking.front().parameters);
+    char line[400];
     std::snprintf(line, sizeof line,
                   "linear order check: order %d beats every linear explanation (ΔBIC %.1f) but not %s; "
-                  "with %s on it: validation NRMSE %.4f, ΔBIC %.1f against %s",
-                  order, bic - linear_bic, EffectName(top.effect.kind), a.effect.c_str(), a.nrmse_after,
-                  inner_bic - top.bic, EffectName(top.effect.kind));
+                  "with %s on it: validation NRMSE %.4f, ΔBIC %.1f against %s (NRMSE %.4f)",
+                  check.order, check.linear_delta_bic, EffectName(top.effect.kind), a.effect.c_str(),
+                  a.nrmse_after, inner_bic - current_bic, current.c_str(), v.nrmse_after);
     report.notes.push_back(line);
-    if (!(inner_bic < top.bic - options.ambiguity_bic)) return false;
+    if (!(inner_bic < current_bic - ctx.options->ambiguity_bic)) return false;
   }
-  GapVerdict& v = report.verdict;
   v.effect = "unmodelled_dynamics";
   v.tied.clear();
   v.confidence = 1.0;
@@ -176,10 +194,10 @@ bool DiagnoseUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, 
   v.param_std.clear();
   v.effects.clear();
   v.effects_std.clear();
-  v.plant = higher;
-  v.nrmse_after = nrmse;
-  v.linear_order = order;
-  v.linear_nrmse_after = nrmse;
+  v.plant = check.plant;
+  v.nrmse_after = check.nrmse;
+  v.linear_order = check.order;
+  v.linear_nrmse_after = check.nrmse;
   if (found) {
     v.effects = a.effects;
     v.effects_std = a.effects_std;
@@ -190,8 +208,8 @@ bool DiagnoseUnmodelledDynamics(const FitContext& ctx, const CandidateFit& top, 
     v.nuisance = a.nuisance;
   }
   if (!after.ranking.empty())
-    report.notes.push_back("after the linear part is fixed (order " + std::to_string(order) + "): " + a.effect +
-                           ", validation NRMSE " + std::to_string(a.nrmse_after));
+    report.notes.push_back("after the linear part is fixed (order " + std::to_string(check.order) + "): " +
+                           a.effect + ", validation NRMSE " + std::to_string(a.nrmse_after));
   return true;
 }
 
