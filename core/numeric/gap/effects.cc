@@ -208,6 +208,11 @@ EffectSimulator::EffectSimulator(const TransferFunction& plant, const std::vecto
     D_ = p.D;
     velocity_row_ = c.C.row(0) * c.A;
     velocity_input_ = (c.C.row(0) * c.B.col(0))(0, 0);
+    // The stick rule needs the force to reach dy/dt within a sub-step: relative degree 1 or 2
+    // (C B ≠ 0 or C A B ≠ 0). Behind a further lag (degree ≥ 3) no input can stop the motion in
+    // one sub-step, and friction stays F_c·sign(dy/dt).
+    const double cab = velocity_row_.dot(c.B.col(0));
+    stick_ = velocity_input_ != 0.0 || std::abs(cab) > 1e-9 * velocity_row_.norm() * c.B.col(0).norm();
     delay_ = std::lround(linear.delay_s / sample_time);
   } else {
     const SampledPlant p = Sample(linear, sample_time);
@@ -233,11 +238,12 @@ void EffectSimulator::Reset() {
 // u_stop = −(v_row A x)/(v_row B + v_in), is applied when |f_stop| ≤ F_c (the axis stops or stays
 // stuck: static = kinetic friction); otherwise F_c·sign(f_stop), which opposes the motion the
 // sub-step would give. Unlike F_c·sign(dy/dt) this does not chatter at reversals, so the result
-// does not depend on the sub-step (a mass below its breakaway force does not creep).
+// does not depend on the sub-step (a mass below its breakaway force does not creep). Only where
+// the input reaches dy/dt within a sub-step (relative degree ≤ 2, `stick_`).
 double EffectSimulator::FrictionForce(double u, double limit) const {
   const double gain = velocity_row_.dot(B_) + velocity_input_;  // ∂(dy/dt)_next / ∂u
   const double free = velocity_row_.dot(A_ * x_);                // (dy/dt)_next at u = 0
-  if (!(std::abs(gain) > 1e-300)) return limit * Sign(velocity_row_.dot(x_) + velocity_input_ * u);
+  if (!stick_ || !(std::abs(gain) > 1e-300)) return limit * Sign(velocity_row_.dot(x_) + velocity_input_ * u);
   const double stop = u + free / gain;  // u − u_stop
   return std::clamp(stop, -limit, limit);
 }

@@ -98,6 +98,7 @@ class EffectSimulator {
 
   std::vector<Effect> effects_;
   bool feedback_ = false;
+  bool stick_ = false;  // friction by the stick rule (relative degree ≤ 2), else F_c·sign(dy/dt)
   int substeps_ = 1;
   Eigen::MatrixXd A_;
   Eigen::VectorXd B_, x_, next_;
