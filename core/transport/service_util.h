@@ -28,6 +28,9 @@ bool StopRequested();
 // Reads a JSON config file ("" gives an empty object). Throws std::invalid_argument naming
 // the file when it cannot be read or parsed.
 nlohmann::json ReadJsonConfig(const std::string& path);
+// The text of the config file named `path`: a JSON object, else std::invalid_argument naming the
+// file (tests/fuzz/fuzz_config feeds it bytes).
+nlohmann::json ParseJsonConfig(const std::string& text, const std::string& path);
 
 // A config value with a default; throws std::invalid_argument naming the key on a wrong type.
 template <class T>

@@ -26,6 +26,13 @@ CatalogConfig CatalogConfig::FromJson(const nlohmann::json& c) {
   return config;
 }
 
+void CatalogConfig::Validate() const {
+  for (const char* role : {kOperatorRole, kServiceRole})
+    if (!keys.Has(role))
+      throw std::invalid_argument(std::string("idrig-catalog needs the ") + role + " key (" + role +
+                                  "_key_file): requests, claims and results are signed");
+}
+
 CatalogService::CatalogService(Transport& transport, CatalogConfig config)
     : transport_(transport),
       config_(std::move(config)),
@@ -35,10 +42,7 @@ CatalogService::CatalogService(Transport& transport, CatalogConfig config)
       verifier_(config_.keys,
                 config_.state_dir.empty() ? "" : config_.state_dir + "/catalog-senders.hwm",
                 config_.auth_window_s, "idrig-catalog") {
-  for (const char* role : {kOperatorRole, kServiceRole})
-    if (!config_.keys.Has(role))
-      throw std::invalid_argument(std::string("idrig-catalog needs the ") + role + " key (" + role +
-                                  "_key_file): requests, claims and results are signed");
+  config_.Validate();
   service_signer_.emplace(kServiceRole, *config_.keys.Find(kServiceRole), reporter_.instance_id());
   operator_signer_.emplace(kOperatorRole, *config_.keys.Find(kOperatorRole), reporter_.instance_id());
   auto subscribe = [this](ChannelKind kind, void (CatalogService::*handler)(

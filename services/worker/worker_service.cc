@@ -37,6 +37,12 @@ WorkerConfig WorkerConfig::FromJson(const nlohmann::json& c) {
   return config;
 }
 
+void WorkerConfig::Validate() const {
+  if (!keys.Has(kServiceRole))
+    throw std::invalid_argument(
+        "idrig-worker needs the service key (service_key_file): claims and results are signed");
+}
+
 IoRecord AssembleRecord(const std::map<int64_t, measurement_block_t>& blocks,
                         int64_t blocks_total) {
   if (blocks_total <= 0) throw std::invalid_argument("the experiment has no measurement blocks");
@@ -149,9 +155,7 @@ WorkerService::WorkerService(Transport& transport, WorkerConfig config)
       verifier_(config_.keys,
                 config_.state_dir.empty() ? "" : config_.state_dir + "/" + config_.worker_id + ".hwm",
                 config_.auth_window_s, "idrig-worker") {
-  if (!config_.keys.Has(kServiceRole))
-    throw std::invalid_argument(
-        "idrig-worker needs the service key (service_key_file): claims and results are signed");
+  config_.Validate();
   signer_.emplace(kServiceRole, *config_.keys.Find(kServiceRole), config_.worker_id);
   auto signed_subscribe = [this](ChannelKind kind,
                                  void (WorkerService::*handler)(const std::string&, const uint8_t*,

@@ -8,7 +8,8 @@ set -euo pipefail
 cd "$(dirname "$0")/../.."
 runs=${1:-1000000}; shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_messages fuzz_excitation_spec fuzz_model_json fuzz_csv fuzz_frf_csv fuzz_effect_json)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_messages fuzz_excitation_spec fuzz_model_json fuzz_csv fuzz_frf_csv fuzz_effect_json
+                                      fuzz_config fuzz_handlers)
 flags="-O1 -g -fno-omit-frame-pointer -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined"
 cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIDRIG_FUZZ=ON \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
