@@ -49,5 +49,36 @@ TEST(ConfigReaders, ConfigTextMustBeAJsonObject) {
             std::string::npos);
 }
 
+// Found by tests/fuzz/fuzz_config (crash-46c586a2, the input below): a seed beyond 2^64 is a JSON
+// float, and get<uint64_t>() converted it out of range (undefined behaviour). Integer keys now
+// take integral numbers within the type's range, and say so.
+TEST(ConfigReaders, IntegerKeysTakeIntegersInRangeOnly) {
+  const nlohmann::json crash = ParseJsonConfig(
+      R"({"rig_id":"rig-2","model":{"format":"idrig.model/1","kind":"tf","domain":"continuous","Ts":0,)"
+      R"("num":[0.5,1],"den":[0,2.5,4,1.5],"delay_s":0},"effectamples":3000,"seed":18893488147419103230})",
+      "crash.json");
+  EXPECT_NE(ErrorOf([&] { ConfigValue<uint64_t>(crash, "seed", 1); })
+                .find("config key 'seed' must be an integer in [0, 18446744073709551615]"),
+            std::string::npos);
+  const nlohmann::json c = nlohmann::json::parse(
+      R"({"max":18446744073709551615,"neg":-5,"half":2.5,"big":3000000000,"text":"7","int":100})");
+  EXPECT_EQ(ConfigValue<uint64_t>(c, "max", 1), 18446744073709551615ull);
+  EXPECT_EQ(ConfigValue<int>(c, "neg", 1), -5);
+  EXPECT_EQ(ConfigValue<int>(c, "int", 1), 100);
+  EXPECT_EQ(ConfigValue<int64_t>(c, "big", 1), 3000000000);
+  EXPECT_EQ(ConfigValue<int>(c, "absent", 42), 42);
+  EXPECT_NE(ErrorOf([&] { ConfigValue<int>(c, "half", 1); }).find("'half' must be an integer"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { ConfigValue<int>(c, "big", 1); }).find("[-2147483648, 2147483647]"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { ConfigValue<size_t>(c, "neg", 1); }).find("'neg' must be an integer"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { ConfigValue<int>(c, "text", 1); }).find("'text' must be an integer"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf([&] { ConfigValue<double>(c, "text", 1); }).find("'text' has the wrong type"),
+            std::string::npos);
+  EXPECT_DOUBLE_EQ(ConfigValue<double>(c, "half", 1), 2.5);
+}
+
 }  // namespace
 }  // namespace idrig
