@@ -121,7 +121,7 @@ void CatalogService::OnIdentifyRequest(const std::string& channel, const uint8_t
                       &transport_.counters()))
     return;
   if (who.role == kServiceRole) return;  // a re-offer (ours, or another catalogue's)
-  if (request.rig_id != RigOfChannel(channel)) return;
+  if (!IsRigOfChannel(request.rig_id, channel)) return;
   if (auto existing = catalog_.Job(request.request_id)) return ReplyWithJobState(*existing);
   const std::string options = request.options_json.empty() ? "{}" : request.options_json;
   const std::string why = Refusal(request.rig_id, request.experiment_id, request.method, options);
@@ -172,6 +172,9 @@ void CatalogService::OnClaim(const std::string& channel, const uint8_t* data, si
   if (!verifier_.Open(channel, data, size, {kServiceRole}, &claim, &who, &transport_.counters()))
     return;
   if (claim.kind != identify_claim_t::KIND_CLAIM) return;  // our own replies
+  // The answer goes to Channel(claim.rig_id): a rig id that is not the channel's (e.g. "si`1",
+  // found by tests/fuzz/fuzz_handlers) made Channel() throw out of this handler.
+  if (!IsRigOfChannel(claim.rig_id, channel)) return;
   if (who.id != claim.worker_id) {
     spdlog::warn("claim for job {} refused: signed by {} for worker {}", claim.request_id, who.id,
                  claim.worker_id);

@@ -195,6 +195,9 @@ void WorkerService::OnRequest(const std::string& channel, const uint8_t* data, s
   if (config_.keys.Has(kOperatorRole)) roles.push_back(kOperatorRole);
   if (!verifier_.Open(channel, data, size, roles, &request, nullptr, &transport_.counters()))
     return;
+  // The claim goes to Channel(request.rig_id) from Tick(), outside any handler: a rig id that
+  // is not the channel's made Channel() throw there and stopped the worker process.
+  if (!IsRigOfChannel(request.rig_id, channel)) return;
   if (finished_.count(request.request_id)) return;
   if (job_ && job_->request.request_id == request.request_id) return;
   offers_.emplace(request.request_id, request);

@@ -161,7 +161,7 @@ void WriteSeeds(const std::string& dir);
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  spdlog::set_level(spdlog::level::off);
+  spdlog::set_level(spdlog::level::err);  // a handler's exception is logged at error level
   if (const char* dir = std::getenv("IDRIG_FUZZ_WRITE_SEEDS")) {
     WriteSeeds(dir);
     std::exit(0);
