@@ -218,6 +218,14 @@ void RigSim::OnCommand(const uint8_t* data, size_t size) {
     End(experiment_status_t::STATE_STOPPED, "stopped by command");
     return;
   }
+  // Checked before any sample of the command is applied: a signed command starting at sample
+  // 4·10^18 made the hold loop below run for ever (the rig hung; found by fuzz_handlers).
+  if (command.first_sample > config_.max_samples ||
+      command.first_sample + command.n_samples > config_.max_samples + 1)
+    return End(experiment_status_t::STATE_FAILED,
+               "command for samples from " + std::to_string(command.first_sample) +
+                   ", beyond the rig's maximum of " + std::to_string(config_.max_samples) +
+                   " samples; safe input applied");
   // Lost commands: hold the last input over the missing samples (a real actuator would too).
   while (e.next_sample < command.first_sample) {
     ++e.command_gaps;
