@@ -328,7 +328,7 @@ void CatalogService::Tick() {
       ++transport_.counters().handler_errors;
     }
   }
-  if (reporter_.Due()) reporter_.Maybe("running", Details().dump(), true);
+  if (reporter_.Due()) reporter_.Maybe("running", Details().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), true);
 }
 
 nlohmann::json CatalogService::Details() {

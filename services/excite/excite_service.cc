@@ -272,7 +272,9 @@ void ExciteService::Tick() {
     if (active_) status_.Publish(active_->status);
     if (!status_.recent().empty()) status_.Publish(status_.recent().back());
   }
-  if (reporter_.Due()) reporter_.Maybe(active_ ? "busy" : "running", Details().dump(), true);
+  // Details hold strings from requests (the last refusal, the SPEC): invalid UTF-8 in one made
+  // dump() throw here, outside any handler, and stopped excite (found by fuzz_handlers).
+  if (reporter_.Due()) reporter_.Maybe(active_ ? "busy" : "running", Details().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), true);
 }
 
 nlohmann::json ExciteService::Details() const {

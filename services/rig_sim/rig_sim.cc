@@ -364,7 +364,7 @@ void RigSim::Tick() {
     if (experiment_) status_.Publish(experiment_->status);
     for (const auto& s : status_.recent()) status_.Publish(s);  // full snapshot of the recent ones
   }
-  if (reporter_.Due()) reporter_.Maybe(experiment_ ? "busy" : "running", Details().dump(), true);
+  if (reporter_.Due()) reporter_.Maybe(experiment_ ? "busy" : "running", Details().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), true);
 }
 
 nlohmann::json RigSim::Details() const {

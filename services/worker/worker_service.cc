@@ -456,7 +456,7 @@ void WorkerService::Tick() {
       SendClaim(offer->second);
     }
   }
-  if (reporter_.Due()) reporter_.Maybe(job_ ? "busy" : "running", Details().dump(), true);
+  if (reporter_.Due()) reporter_.Maybe(job_ ? "busy" : "running", Details().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), true);
 }
 
 nlohmann::json WorkerService::Details() const {

@@ -2,6 +2,7 @@
 // memq://, fed the authenticated but hostile messages the fuzzer made.
 #include <gtest/gtest.h>
 
+#include <idrig/experiment_request_t.hpp>
 #include <idrig/experiment_status_t.hpp>
 #include <idrig/identify_claim_t.hpp>
 #include <idrig/identify_request_t.hpp>
@@ -10,6 +11,7 @@
 #include "core/transport/channels.h"
 #include "core/transport/transport.h"
 #include "services/catalog/catalog_service.h"
+#include "services/excite/excite_service.h"
 #include "services/worker/worker_service.h"
 
 namespace idrig {
@@ -97,6 +99,41 @@ TEST(HandlerRegression, WorkerIgnoresARequestForAnUnusableRig) {
   for (int i = 0; i < 5; ++i) EXPECT_NO_THROW(worker.Poll(1));
   EXPECT_EQ(transport->counters().handler_errors, 0);
   EXPECT_FALSE(worker.busy());
+}
+
+// crash-be3fbecd: a signed experiment request whose SPEC is not UTF-8 is refused (unknown kind),
+// and the refusal, quoting the SPEC, goes into excite's status details; nlohmann's dump() threw
+// type_error 316 on it at the next status report, in Tick(): excite stopped. Now the bytes are
+// replaced in the status text and excite keeps running.
+TEST(HandlerRegression, ExciteSurvivesARequestThatIsNotUtf8) {
+  auto transport = MakeLcmTransport("memq://");
+  ExciteConfig config;
+  config.rig_id = "sim1";
+  config.key = Key(1);
+  config.keys = Keys();
+  ExciteService excite(*transport, config);
+  EnvelopeSigner operator_cli(kOperatorRole, Key(2), "cli:test");
+  experiment_request_t request{};
+  request.request_id = 21;
+  request.rig_id = "sim1";
+  request.experiment_id = 3;
+  request.action = experiment_request_t::ACTION_START;
+  request.signal_spec = "pr\xff\xfebs:bits=10";
+  request.sample_rate_hz = 100;
+  request.duration_s = 2;
+  request.speed = 1;
+  operator_cli.Publish(*transport, Channel("sim1", ChannelKind::kExperimentRequest), request);
+  std::string status;
+  transport->Subscribe("IDRIG/STATUS/.*", [&](const std::string&, const uint8_t* d, size_t n) {
+    status.assign(reinterpret_cast<const char*>(d), n);
+  });
+  // The service status is due within its period (about a second).
+  const int64_t end = NowMicros() + 2500000;
+  while (status.find("refus") == std::string::npos && NowMicros() < end)
+    ASSERT_NO_THROW(excite.Poll(20));
+  EXPECT_FALSE(excite.busy());
+  EXPECT_EQ(transport->counters().handler_errors, 0);
+  EXPECT_NE(status.find("unknown signal kind"), std::string::npos);
 }
 
 }  // namespace
