@@ -94,6 +94,9 @@ LtiModel ModelFromJson(const json& j) {
   if (!j.contains("kind") || !j["kind"].is_string())
     throw std::invalid_argument("model JSON: \"kind\" must be \"tf\" or \"ss\"");
   const std::string kind = j["kind"];
+  // A "domain" that is not a string threw nlohmann's type_error from j.value() (fuzz_model_json).
+  if (j.contains("domain") && !j["domain"].is_string())
+    throw std::invalid_argument("model JSON: \"domain\" must be \"continuous\" or \"discrete\"");
   const std::string domain = j.value("domain", "continuous");
   if (domain != "continuous" && domain != "discrete")
     throw std::invalid_argument("model JSON: \"domain\" must be \"continuous\" or \"discrete\", got \"" + domain + "\"");

@@ -49,6 +49,19 @@ void ValidateRigId(const std::string& rig_id) {
   }
 }
 
+bool IsValidRigId(const std::string& rig_id) {
+  try {
+    ValidateRigId(rig_id);
+    return true;
+  } catch (const std::invalid_argument&) {
+    return false;
+  }
+}
+
+bool IsRigOfChannel(const std::string& rig_id, const std::string& channel) {
+  return rig_id == RigOfChannel(channel) && IsValidRigId(rig_id);
+}
+
 std::string Channel(const std::string& rig_id, ChannelKind kind) {
   ValidateRigId(rig_id);
   return "IDRIG/" + rig_id + "/" + Suffix(kind);

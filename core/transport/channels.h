@@ -40,6 +40,11 @@ enum class ChannelKind {
 
 // Throws std::invalid_argument naming the rule when the rig id is not usable in a channel.
 void ValidateRigId(const std::string& rig_id);
+// The same rule without throwing.
+bool IsValidRigId(const std::string& rig_id);
+// A message's rig id is the rig of the channel it came on, and usable in channel names (a
+// handler that answers on Channel(rig_id, …) must check this first: Channel() throws).
+bool IsRigOfChannel(const std::string& rig_id, const std::string& channel);
 // "IDRIG/<rig>/<KIND>".
 std::string Channel(const std::string& rig_id, ChannelKind kind);
 // Regex matching the kind on every rig (for services that serve all rigs).

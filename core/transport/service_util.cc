@@ -9,6 +9,7 @@
 #include <atomic>
 #include <csignal>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/transport/transport.h"
@@ -61,11 +62,22 @@ nlohmann::json ReadJsonConfig(const std::string& path) {
   if (path.empty()) return nlohmann::json::object();
   std::ifstream in(path);
   if (!in) throw std::invalid_argument("cannot read config file '" + path + "'");
+  std::stringstream text;
+  text << in.rdbuf();
+  return ParseJsonConfig(text.str(), path);
+}
+
+nlohmann::json ParseJsonConfig(const std::string& text, const std::string& path) {
+  nlohmann::json config;
   try {
-    return nlohmann::json::parse(in);
+    config = nlohmann::json::parse(text);
   } catch (const std::exception& e) {
     throw std::invalid_argument("config file '" + path + "' is not valid JSON: " + e.what());
   }
+  if (!config.is_object())
+    throw std::invalid_argument("config file '" + path + "' must hold a JSON object, got " +
+                                config.type_name());
+  return config;
 }
 
 }  // namespace idrig

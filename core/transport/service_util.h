@@ -1,6 +1,9 @@
 #pragma once
 // Small helpers shared by the service mains: stop on SIGINT/SIGTERM, JSON config files.
+#include <cstdint>
+#include <limits>
 #include <memory>
+#include <type_traits>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -28,13 +31,37 @@ bool StopRequested();
 // Reads a JSON config file ("" gives an empty object). Throws std::invalid_argument naming
 // the file when it cannot be read or parsed.
 nlohmann::json ReadJsonConfig(const std::string& path);
+// The text of the config file named `path`: a JSON object, else std::invalid_argument naming the
+// file (tests/fuzz/fuzz_config feeds it bytes).
+nlohmann::json ParseJsonConfig(const std::string& text, const std::string& path);
 
 // A config value with a default; throws std::invalid_argument naming the key on a wrong type.
+// An integer key takes an integral number within T's range (1e19 for a uint64_t or 2.5 for an
+// int was a float-to-integer conversion out of range, undefined behaviour: fuzz_config).
 template <class T>
 T ConfigValue(const nlohmann::json& config, const char* key, const T& fallback) {
   if (!config.is_object() || !config.contains(key) || config[key].is_null()) return fallback;
+  const nlohmann::json& value = config[key];
+  if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
+    const bool in_range =
+        value.is_number_unsigned()
+            ? value.get<uint64_t>() <= static_cast<uint64_t>(std::numeric_limits<T>::max())
+        : value.is_number_integer()
+            ? value.get<int64_t>() >= static_cast<int64_t>(std::numeric_limits<T>::min()) &&
+                  (value.get<int64_t>() < 0 ||
+                   static_cast<uint64_t>(value.get<int64_t>()) <=
+                       static_cast<uint64_t>(std::numeric_limits<T>::max()))
+            : false;
+    if (!in_range)
+      throw std::invalid_argument(std::string("config key '") + key + "' must be an integer in [" +
+                                  std::to_string(std::numeric_limits<T>::min()) + ", " +
+                                  std::to_string(std::numeric_limits<T>::max()) + "], got " +
+                                  value.dump());
+    return value.is_number_unsigned() ? static_cast<T>(value.get<uint64_t>())
+                                      : static_cast<T>(value.get<int64_t>());
+  }
   try {
-    return config[key].get<T>();
+    return value.get<T>();
   } catch (const std::exception&) {
     throw std::invalid_argument(std::string("config key '") + key + "' has the wrong type");
   }

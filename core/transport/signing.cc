@@ -66,8 +66,12 @@ HmacKey ReadKeyFile(const std::string& path) {
   if (!in) throw std::invalid_argument("cannot read HMAC key file '" + path + "'");
   std::stringstream ss;
   ss << in.rdbuf();
+  return ParseKeyText(ss.str(), path);
+}
+
+HmacKey ParseKeyText(const std::string& text, const std::string& path) {
   std::string hex;
-  for (char c : ss.str())
+  for (char c : text)
     if (!std::isspace(static_cast<unsigned char>(c))) hex += c;
   auto nibble = [&](char c) -> int {
     if (c >= '0' && c <= '9') return c - '0';

@@ -18,6 +18,9 @@ class ReplayStore;  // core/transport/auth.h
 // saying how to fix it when it is missing, not hex, readable by group or others, or too weak
 // (CheckKeyStrength).
 HmacKey ReadKeyFile(const std::string& path);
+// The text of a key file named `path` (for the messages): hex digits, whitespace ignored, then
+// CheckKeyStrength. ReadKeyFile after its mode checks; tests/fuzz/fuzz_config feeds it bytes.
+HmacKey ParseKeyText(const std::string& text, const std::string& path);
 // Throws std::invalid_argument (what + the reason + how to make a good key) for a key shorter
 // than 32 bytes, one that repeats a pattern (all-zero, "abab…"), or one with few distinct bytes.
 void CheckKeyStrength(const HmacKey& key, const std::string& what);

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <lcm/lcm-cpp.hpp>
+#include <spdlog/spdlog.h>
 #include <stdexcept>
 
 namespace idrig {
@@ -65,8 +66,12 @@ class LcmTransport : public Transport {
       ++counters->received;
       try {
         handler(channel, static_cast<const uint8_t*>(rbuf->data), rbuf->data_size);
+      } catch (const std::exception& e) {  // LCM calls us from C: nothing may escape.
+        ++counters->handler_errors;
+        spdlog::error("handler of a message on {} failed: {}", channel, e.what());
       } catch (...) {
-        ++counters->handler_errors;  // LCM calls us from C: nothing may escape.
+        ++counters->handler_errors;
+        spdlog::error("handler of a message on {} failed", channel);
       }
     }
   };

@@ -26,6 +26,13 @@ CatalogConfig CatalogConfig::FromJson(const nlohmann::json& c) {
   return config;
 }
 
+void CatalogConfig::Validate() const {
+  for (const char* role : {kOperatorRole, kServiceRole})
+    if (!keys.Has(role))
+      throw std::invalid_argument(std::string("idrig-catalog needs the ") + role + " key (" + role +
+                                  "_key_file): requests, claims and results are signed");
+}
+
 CatalogService::CatalogService(Transport& transport, CatalogConfig config)
     : transport_(transport),
       config_(std::move(config)),
@@ -35,10 +42,7 @@ CatalogService::CatalogService(Transport& transport, CatalogConfig config)
       verifier_(config_.keys,
                 config_.state_dir.empty() ? "" : config_.state_dir + "/catalog-senders.hwm",
                 config_.auth_window_s, "idrig-catalog") {
-  for (const char* role : {kOperatorRole, kServiceRole})
-    if (!config_.keys.Has(role))
-      throw std::invalid_argument(std::string("idrig-catalog needs the ") + role + " key (" + role +
-                                  "_key_file): requests, claims and results are signed");
+  config_.Validate();
   service_signer_.emplace(kServiceRole, *config_.keys.Find(kServiceRole), reporter_.instance_id());
   operator_signer_.emplace(kOperatorRole, *config_.keys.Find(kOperatorRole), reporter_.instance_id());
   auto subscribe = [this](ChannelKind kind, void (CatalogService::*handler)(
@@ -117,7 +121,7 @@ void CatalogService::OnIdentifyRequest(const std::string& channel, const uint8_t
                       &transport_.counters()))
     return;
   if (who.role == kServiceRole) return;  // a re-offer (ours, or another catalogue's)
-  if (request.rig_id != RigOfChannel(channel)) return;
+  if (!IsRigOfChannel(request.rig_id, channel)) return;
   if (auto existing = catalog_.Job(request.request_id)) return ReplyWithJobState(*existing);
   const std::string options = request.options_json.empty() ? "{}" : request.options_json;
   const std::string why = Refusal(request.rig_id, request.experiment_id, request.method, options);
@@ -168,6 +172,9 @@ void CatalogService::OnClaim(const std::string& channel, const uint8_t* data, si
   if (!verifier_.Open(channel, data, size, {kServiceRole}, &claim, &who, &transport_.counters()))
     return;
   if (claim.kind != identify_claim_t::KIND_CLAIM) return;  // our own replies
+  // The answer goes to Channel(claim.rig_id): a rig id that is not the channel's (e.g. "si`1",
+  // found by tests/fuzz/fuzz_handlers) made Channel() throw out of this handler.
+  if (!IsRigOfChannel(claim.rig_id, channel)) return;
   if (who.id != claim.worker_id) {
     spdlog::warn("claim for job {} refused: signed by {} for worker {}", claim.request_id, who.id,
                  claim.worker_id);
@@ -321,7 +328,7 @@ void CatalogService::Tick() {
       ++transport_.counters().handler_errors;
     }
   }
-  if (reporter_.Due()) reporter_.Maybe("running", Details().dump(), true);
+  if (reporter_.Due()) reporter_.Maybe("running", Details().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), true);
 }
 
 nlohmann::json CatalogService::Details() {

@@ -28,6 +28,8 @@ struct CatalogConfig {
   // Keys "db_path", "lease_s", "offer_period_s", "operator_key_file", "service_key_file",
   // "state_dir", "auth_window_s".
   static CatalogConfig FromJson(const nlohmann::json& config);
+  // std::invalid_argument naming a missing key; the constructor calls it.
+  void Validate() const;
 };
 
 class CatalogService {

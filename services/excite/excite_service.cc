@@ -31,6 +31,16 @@ ExciteConfig ExciteConfig::FromJson(const nlohmann::json& c) {
   return config;
 }
 
+void ExciteConfig::Validate() const {
+  if (key.size() < 16)
+    throw std::invalid_argument("idrig-excite needs an HMAC key (key_file) of >= 16 bytes");
+  if (!keys.Has(kOperatorRole))
+    throw std::invalid_argument(
+        "idrig-excite needs the operator key (operator_key_file): experiment requests are signed");
+  if (block_samples < 1 || block_samples > 4000)
+    throw std::invalid_argument("block_samples must be in 1..4000 (one command < 60 KB)");
+}
+
 ExciteService::ExciteService(Transport& transport, ExciteConfig config)
     : transport_(transport),
       config_(std::move(config)),
@@ -45,15 +55,8 @@ ExciteService::ExciteService(Transport& transport, ExciteConfig config)
                 config_.state_dir.empty() ? "" : config_.state_dir + "/excite-requests.hwm",
                 config_.auth_window_s, "idrig-excite"),
       reply_channel_(Channel(config_.rig_id, ChannelKind::kRequestReply)) {
-  if (config_.key.size() < 16)
-    throw std::invalid_argument("idrig-excite needs an HMAC key (key_file) of >= 16 bytes");
-  const HmacKey* operator_key = config_.keys.Find(kOperatorRole);
-  if (!operator_key)
-    throw std::invalid_argument(
-        "idrig-excite needs the operator key (operator_key_file): experiment requests are signed");
-  reply_signer_.emplace(kOperatorRole, *operator_key, "excite-" + config_.rig_id);
-  if (config_.block_samples < 1 || config_.block_samples > 4000)
-    throw std::invalid_argument("block_samples must be in 1..4000 (one command < 60 KB)");
+  config_.Validate();
+  reply_signer_.emplace(kOperatorRole, *config_.keys.Find(kOperatorRole), "excite-" + config_.rig_id);
   transport_.Subscribe(
       Channel(config_.rig_id, ChannelKind::kExperimentRequest),
       [this](const std::string& c, const uint8_t* d, size_t n) { OnRequest(c, d, n); }, 1000);
@@ -269,7 +272,9 @@ void ExciteService::Tick() {
     if (active_) status_.Publish(active_->status);
     if (!status_.recent().empty()) status_.Publish(status_.recent().back());
   }
-  if (reporter_.Due()) reporter_.Maybe(active_ ? "busy" : "running", Details().dump(), true);
+  // Details hold strings from requests (the last refusal, the SPEC): invalid UTF-8 in one made
+  // dump() throw here, outside any handler, and stopped excite (found by fuzz_handlers).
+  if (reporter_.Due()) reporter_.Maybe(active_ ? "busy" : "running", Details().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), true);
 }
 
 nlohmann::json ExciteService::Details() const {

@@ -41,6 +41,8 @@ struct ExciteConfig {
   // "auth_window_s", "block_samples", "max_abs", "max_rate", "max_speed", "max_duration_s",
   // "max_samples", "min_sample_rate_hz", "max_sample_rate_hz", "status_period_s".
   static ExciteConfig FromJson(const nlohmann::json& config);
+  // std::invalid_argument naming a missing key or a bad block_samples; the constructor calls it.
+  void Validate() const;
 };
 
 class ExciteService {

@@ -349,7 +349,7 @@ nlohmann::json LoggerService::Details() {
 
 void LoggerService::Poll(int timeout_ms) {
   transport_.Handle(timeout_ms);
-  if (reporter_.Due()) reporter_.Maybe("running", Details().dump(), true);
+  if (reporter_.Due()) reporter_.Maybe("running", Details().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), true);
 }
 
 }  // namespace idrig

@@ -43,6 +43,23 @@ RigSimConfig RigSimConfig::FromJson(const nlohmann::json& c) {
   return config;
 }
 
+void RigSimConfig::Validate() const {
+  if (keys.empty()) throw std::invalid_argument("idrig-rig-sim needs an HMAC key (key_file)");
+  const StateSpace ss = ToStateSpace(plant);
+  if (ss.NumInputs() != 1 || ss.NumOutputs() != 1)
+    throw std::invalid_argument("idrig-rig-sim simulates SISO plants only");
+  if (effect.kind != EffectKind::kNone &&
+      !(std::holds_alternative<TransferFunction>(plant) &&
+        !std::get<TransferFunction>(plant).IsDiscrete()))
+    throw std::invalid_argument("idrig-rig-sim: an effect needs a continuous transfer-function plant");
+  if (effect.kind == EffectKind::kParameterMismatch)
+    throw std::invalid_argument("idrig-rig-sim: parameter_mismatch is a different plant, not an effect: "
+                                "change the model instead");
+  ValidateEffect(effect);
+  if (block_samples < 1 || block_samples > 3000)
+    throw std::invalid_argument("block_samples must be in 1..3000 (one block < 60 KB)");
+}
+
 RigSim::RigSim(Transport& transport, RigSimConfig config)
     : transport_(transport),
       config_(std::move(config)),
@@ -53,21 +70,7 @@ RigSim::RigSim(Transport& transport, RigSimConfig config)
       status_(transport, Channel(config_.rig_id, ChannelKind::kExperimentStatus),
               config_.status_period_s),
       rng_(config_.seed) {
-  if (config_.keys.empty())
-    throw std::invalid_argument("idrig-rig-sim needs an HMAC key (key_file)");
-  const StateSpace ss = ToStateSpace(config_.plant);
-  if (ss.NumInputs() != 1 || ss.NumOutputs() != 1)
-    throw std::invalid_argument("idrig-rig-sim simulates SISO plants only");
-  if (config_.effect.kind != EffectKind::kNone &&
-      !(std::holds_alternative<TransferFunction>(config_.plant) &&
-        !std::get<TransferFunction>(config_.plant).IsDiscrete()))
-    throw std::invalid_argument("idrig-rig-sim: an effect needs a continuous transfer-function plant");
-  if (config_.effect.kind == EffectKind::kParameterMismatch)
-    throw std::invalid_argument("idrig-rig-sim: parameter_mismatch is a different plant, not an effect: "
-                                "change the model instead");
-  ValidateEffect(config_.effect);
-  if (config_.block_samples < 1 || config_.block_samples > 3000)
-    throw std::invalid_argument("block_samples must be in 1..3000 (one block < 60 KB)");
+  config_.Validate();
   for (const auto& [id, key] : config_.keys) verifier_.AddKey(id, key);
   verifier_.UseStore(&command_marks_);
   last_u_ = config_.safe_input;
@@ -215,6 +218,14 @@ void RigSim::OnCommand(const uint8_t* data, size_t size) {
     End(experiment_status_t::STATE_STOPPED, "stopped by command");
     return;
   }
+  // Checked before any sample of the command is applied: a signed command starting at sample
+  // 4·10^18 made the hold loop below run for ever (the rig hung; found by fuzz_handlers).
+  if (command.first_sample > config_.max_samples ||
+      command.first_sample + command.n_samples > config_.max_samples + 1)
+    return End(experiment_status_t::STATE_FAILED,
+               "command for samples from " + std::to_string(command.first_sample) +
+                   ", beyond the rig's maximum of " + std::to_string(config_.max_samples) +
+                   " samples; safe input applied");
   // Lost commands: hold the last input over the missing samples (a real actuator would too).
   while (e.next_sample < command.first_sample) {
     ++e.command_gaps;
@@ -353,7 +364,7 @@ void RigSim::Tick() {
     if (experiment_) status_.Publish(experiment_->status);
     for (const auto& s : status_.recent()) status_.Publish(s);  // full snapshot of the recent ones
   }
-  if (reporter_.Due()) reporter_.Maybe(experiment_ ? "busy" : "running", Details().dump(), true);
+  if (reporter_.Due()) reporter_.Maybe(experiment_ ? "busy" : "running", Details().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), true);
 }
 
 nlohmann::json RigSim::Details() const {

@@ -53,6 +53,9 @@ struct RigSimConfig {
   // "max_rate", "watchdog_s", "safe_input", "block_samples", "key_file" + "key_id", "effect", "state_dir",
   // "min_sample_rate_hz", "max_sample_rate_hz", "max_samples", "max_late_start_samples".
   static RigSimConfig FromJson(const nlohmann::json& config);
+  // std::invalid_argument naming what the rig cannot run (no key, a MIMO plant, an effect it
+  // cannot simulate, block_samples); the constructor calls it.
+  void Validate() const;
 };
 
 class RigSim {

@@ -37,6 +37,12 @@ WorkerConfig WorkerConfig::FromJson(const nlohmann::json& c) {
   return config;
 }
 
+void WorkerConfig::Validate() const {
+  if (!keys.Has(kServiceRole))
+    throw std::invalid_argument(
+        "idrig-worker needs the service key (service_key_file): claims and results are signed");
+}
+
 IoRecord AssembleRecord(const std::map<int64_t, measurement_block_t>& blocks,
                         int64_t blocks_total) {
   if (blocks_total <= 0) throw std::invalid_argument("the experiment has no measurement blocks");
@@ -149,9 +155,7 @@ WorkerService::WorkerService(Transport& transport, WorkerConfig config)
       verifier_(config_.keys,
                 config_.state_dir.empty() ? "" : config_.state_dir + "/" + config_.worker_id + ".hwm",
                 config_.auth_window_s, "idrig-worker") {
-  if (!config_.keys.Has(kServiceRole))
-    throw std::invalid_argument(
-        "idrig-worker needs the service key (service_key_file): claims and results are signed");
+  config_.Validate();
   signer_.emplace(kServiceRole, *config_.keys.Find(kServiceRole), config_.worker_id);
   auto signed_subscribe = [this](ChannelKind kind,
                                  void (WorkerService::*handler)(const std::string&, const uint8_t*,
@@ -191,6 +195,9 @@ void WorkerService::OnRequest(const std::string& channel, const uint8_t* data, s
   if (config_.keys.Has(kOperatorRole)) roles.push_back(kOperatorRole);
   if (!verifier_.Open(channel, data, size, roles, &request, nullptr, &transport_.counters()))
     return;
+  // The claim goes to Channel(request.rig_id) from Tick(), outside any handler: a rig id that
+  // is not the channel's made Channel() throw there and stopped the worker process.
+  if (!IsRigOfChannel(request.rig_id, channel)) return;
   if (finished_.count(request.request_id)) return;
   if (job_ && job_->request.request_id == request.request_id) return;
   offers_.emplace(request.request_id, request);
@@ -449,7 +456,7 @@ void WorkerService::Tick() {
       SendClaim(offer->second);
     }
   }
-  if (reporter_.Due()) reporter_.Maybe(job_ ? "busy" : "running", Details().dump(), true);
+  if (reporter_.Due()) reporter_.Maybe(job_ ? "busy" : "running", Details().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), true);
 }
 
 nlohmann::json WorkerService::Details() const {

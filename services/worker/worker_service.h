@@ -41,6 +41,8 @@ struct WorkerConfig {
   double auth_window_s = 300;
   // Keys as the fields, plus "operator_key_file", "service_key_file".
   static WorkerConfig FromJson(const nlohmann::json& config);
+  // std::invalid_argument naming a missing key; the constructor calls it.
+  void Validate() const;
 };
 
 // The record of an experiment from its blocks (seq 0..n-1, contiguous samples). Throws

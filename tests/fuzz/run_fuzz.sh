@@ -4,24 +4,31 @@
 # new inputs go to build-fuzz/corpus/<target>). A crash leaves build-fuzz/crash-* and stops.
 # A benchmark, not a test: figures in docs/services.md ("Fuzzing").
 # Usage: tests/fuzz/run_fuzz.sh [RUNS] [TARGET...]   (needs clang: deploy/install-bench-deps.sh)
+# FUZZ_NO_BUILD=1 runs the binaries already in build-fuzz/bin (e.g. while another target builds).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 runs=${1:-1000000}; shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(fuzz_messages fuzz_excitation_spec fuzz_model_json fuzz_csv fuzz_frf_csv fuzz_effect_json)
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_messages fuzz_excitation_spec fuzz_model_json fuzz_csv fuzz_frf_csv fuzz_effect_json
+                                      fuzz_config fuzz_handlers)
 flags="-O1 -g -fno-omit-frame-pointer -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined"
-cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIDRIG_FUZZ=ON \
+[ "${FUZZ_NO_BUILD:-0}" = 1 ] || cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIDRIG_FUZZ=ON \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
   -DCMAKE_CXX_FLAGS="$flags" -DCMAKE_EXE_LINKER_FLAGS="-fsanitize=address,undefined" >/dev/null
 for t in "${targets[@]}"; do
-  cmake --build build-fuzz -j2 --target "$t" >/dev/null
+  [ "${FUZZ_NO_BUILD:-0}" = 1 ] || cmake --build build-fuzz -j2 --target "$t" >/dev/null
   mkdir -p "build-fuzz/corpus/$t"
+  before=$(ls "build-fuzz/corpus/$t" | wc -l)
   start=$(date +%s.%N)
   (cd build-fuzz && "bin/$t" -runs="$runs" -max_len=4096 -timeout=10 -rss_limit_mb=2048 \
      -print_final_stats=1 "corpus/$t" "../tests/fuzz/corpus/$t" 2> "fuzz-$t.log") \
     || { echo "$t: CRASH (build-fuzz/fuzz-$t.log)"; tail -40 "build-fuzz/fuzz-$t.log"; exit 1; }
   end=$(date +%s.%N)
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "build-fuzz/fuzz-$t.log" | grep -o '[0-9]*$')
-  cov=$(grep -o 'cov: [0-9]*' "build-fuzz/fuzz-$t.log" | tail -1)
-  printf '%-22s %10s executions in %6.1f s, %s, no crash\n' "$t" "$execs" "$(echo "$end - $start" | bc)" "$cov"
+  cov=$(grep -o 'cov: [0-9]*' "build-fuzz/fuzz-$t.log" | tail -1 | grep -o '[0-9]*$')
+  rss=$(grep -o 'stat::peak_rss_mb: *[0-9]*' "build-fuzz/fuzz-$t.log" | grep -o '[0-9]*$')
+  added=$(( $(ls "build-fuzz/corpus/$t" | wc -l) - before ))
+  secs=$(echo "$end - $start" | bc)
+  printf '%-22s %10s executions in %7.1f s (%6.0f/s), cov %5s edges, %5s new inputs, peak RSS %s MB, no crash\n' \
+    "$t" "$execs" "$secs" "$(echo "$execs / $secs" | bc -l)" "$cov" "$added" "$rss"
 done

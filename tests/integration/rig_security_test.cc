@@ -129,6 +129,27 @@ TEST_F(RigSecurity, RefusesOverLimitCommandsAndGoesSafe) {
   EXPECT_FALSE(rig_->running());
 }
 
+// Found by tests/fuzz/fuzz_handlers (timeout-194c7745): a validly signed command of the running
+// experiment starting at sample 4·10^18 made the rig hold its input over the "lost" samples in
+// a loop that never ended. Now refused before any sample is applied: the experiment fails at
+// once, naming the limit, and no block is published for it.
+TEST_F(RigSecurity, ACommandFarBeyondTheSampleLimitEndsTheExperimentAtOnce) {
+  actuator_command_t good = Command(30, 0, {0.5, 0.5, 0.5, 0.5, 0.5});
+  SignCommand(&good, kKey);
+  Send(good);
+  ASSERT_TRUE(rig_->running());
+  actuator_command_t far = Command(31, 4000000000000000000, {0.5});
+  SignCommand(&far, kKey);
+  Send(far);
+  EXPECT_FALSE(rig_->running());
+  EXPECT_EQ(last_status_.state, experiment_status_t::STATE_FAILED);
+  EXPECT_NE(last_status_.message.find("beyond the rig's maximum of 10000000 samples"),
+            std::string::npos)
+      << last_status_.message;
+  EXPECT_EQ(Samples(), 5);
+  EXPECT_EQ(transport_->counters().handler_errors, 0);
+}
+
 TEST_F(RigSecurity, WatchdogAppliesTheSafeInputWhenCommandsStop) {
   actuator_command_t good = Command(30, 0, {0.4, 0.8, 1.2});
   SignCommand(&good, kKey);

@@ -45,6 +45,10 @@ enum class MultisinePhase { kZero, kSchroeder, kRandom };
 enum class MultisineScale { kLine, kRms };
 enum class ChirpSweep { kLinear, kLogarithmic };
 
+// The most lines a multisine SPEC may list (each costs a sine per sample; a SPEC of a few ranges
+// listing 3.5 M lines took 15 s to parse: found by tests/fuzz/fuzz_excitation_spec).
+inline constexpr long long kMaxMultisineLines = 10000;
+
 struct ExcitationSpec {
   ExcitationKind kind = ExcitationKind::kSine;
   double amplitude = 1.0;   // amp
@@ -61,7 +65,8 @@ struct ExcitationSpec {
 
   // multisine: ω_k = lines[k]·2π·base_frequency_hz, after the line-set filter
   double base_frequency_hz = 0.1;  // f0 (or w0/(2π)); base period T_b = 1/f0
-  std::vector<int> lines;          // requested harmonic numbers n_k >= 1 (default 1..10)
+  std::vector<int> lines;          // requested harmonic numbers n_k >= 1 (default 1..10), at most
+                                   // kMaxMultisineLines of them
   MultisineLineSet line_set = MultisineLineSet::kAll;
   MultisinePhase phase_rule = MultisinePhase::kZero;
   MultisineScale scale = MultisineScale::kLine;

@@ -135,6 +135,10 @@ TEST(ModelJsonBadInput, UnreadableOrMalformedModelFiles) {
   expect(write("ts.json", R"({"format":"idrig.model/1","kind":"tf","domain":"discrete","num":[1],"den":[1,2]})"), "Ts");
   expect(write("rows.json", R"({"format":"idrig.model/1","kind":"ss","A":[[1,2],[3]],"B":[[1],[1]],"C":[[1,0]],"D":[[0]]})"), "rows have different lengths");
   expect(write("str.json", R"({"format":"idrig.model/1","kind":"tf","num":["a"],"den":[1,2]})"), "must be a number");
+  // Found by tests/fuzz/fuzz_model_json (crash-101a1d30): a non-string "domain" threw
+  // nlohmann's type_error instead of std::invalid_argument.
+  expect(write("domain.json", R"({"format":"idrig.model/1","kind":"tf","domain":0,"num":[0.5,1],"den":[1,2.5,4,1.5],"delay_s":0})"),
+         "\"domain\" must be");
 }
 
 }  // namespace
