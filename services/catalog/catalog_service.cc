@@ -1,5 +1,6 @@
 #include "services/catalog/catalog_service.h"
 
+#include <cmath>
 #include <idrig/experiment_status_t.hpp>
 #include <idrig/identify_claim_t.hpp>
 #include <idrig/identify_request_t.hpp>
@@ -288,6 +289,13 @@ void CatalogService::OnExperimentStatus(const std::string&, const uint8_t* data,
   e.start_utime = status.start_utime;
   e.end_utime = status.end_utime;
   if (status.source == "excite") {
+    // Status is unsigned (readers need no key): an implausible one is dropped, with a line that
+    // says why, instead of failing the insert (fuzz_handlers crash-417cbf93: a NaN rate).
+    if (!std::isfinite(status.sample_rate_hz) || status.sample_rate_hz < 0) {
+      spdlog::warn("experiment status of {}/{} from excite dropped: sample rate {} is not a rate",
+                   status.rig_id, status.experiment_id, status.sample_rate_hz);
+      return;
+    }
     e.signal_spec = status.signal_spec;
     e.sample_rate_hz = status.sample_rate_hz;
     e.samples_planned = status.samples_total;

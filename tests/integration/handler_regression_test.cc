@@ -2,6 +2,8 @@
 // memq://, fed the authenticated but hostile messages the fuzzer made.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <idrig/experiment_request_t.hpp>
 #include <idrig/experiment_status_t.hpp>
 #include <idrig/identify_claim_t.hpp>
@@ -78,6 +80,39 @@ TEST(HandlerRegression, CatalogIgnoresAClaimForAnotherOrUnusableRig) {
   // The three claims themselves, and one grant: to the claim that named its channel's rig.
   EXPECT_EQ(grants_on_sim1, 4);
   EXPECT_EQ(catalog.catalog().Job(12)->worker_id, "worker-1");
+}
+
+// crash-417cbf93: an (unsigned) experiment status from excite with sample_rate_hz NaN failed the
+// catalogue's insert (NOT NULL constraint) inside the handler. Now it is dropped with a log line,
+// the experiment already recorded keeps its rate, and a sound status is still stored.
+TEST(HandlerRegression, CatalogDropsAnExperimentStatusWithANonFiniteRate) {
+  auto transport = MakeLcmTransport("memq://");
+  CatalogConfig config;
+  config.db_path = ":memory:";
+  config.keys = Keys();
+  CatalogService catalog(*transport, config);
+  experiment_status_t status{};
+  status.source = "excite";
+  status.rig_id = "sim1";
+  status.experiment_id = 9;
+  status.state = experiment_status_t::STATE_RUNNING;
+  status.signal_spec = "prbs:bits=10";
+  status.sample_rate_hz = 100;
+  status.samples_total = 800;
+  transport->PublishMessage(Channel("sim1", ChannelKind::kExperimentStatus), status);
+  catalog.Poll(0);
+  for (double bad : {std::nan(""), -5.0, HUGE_VAL}) {
+    status.sample_rate_hz = bad;
+    status.samples_total = 801;  // a change, so that it is not skipped as a repeat
+    transport->PublishMessage(Channel("sim1", ChannelKind::kExperimentStatus), status);
+    catalog.Poll(0);
+  }
+  EXPECT_EQ(transport->counters().handler_errors, 0);
+  const auto recorded = catalog.catalog().Experiments("sim1");
+  ASSERT_EQ(recorded.size(), 1u);
+  EXPECT_EQ(recorded[0].experiment_id, 9);
+  EXPECT_EQ(recorded[0].sample_rate_hz, 100);
+  EXPECT_EQ(recorded[0].samples_planned, 800);
 }
 
 // The same rig id in an identify request made the worker's Tick() throw when it claimed the job:
