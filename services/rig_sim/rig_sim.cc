@@ -226,7 +226,17 @@ void RigSim::OnCommand(const uint8_t* data, size_t size) {
                "command for samples from " + std::to_string(command.first_sample) +
                    ", beyond the rig's maximum of " + std::to_string(config_.max_samples) +
                    " samples; safe input applied");
-  // Lost commands: hold the last input over the missing samples (a real actuator would too).
+  // Lost commands: hold the last input over the missing samples (a real actuator would too) —
+  // but no longer than the watchdog allows: commands missing for longer would have put the rig
+  // to its safe input, so a command further ahead is not a lost-command gap (fuzz_handlers
+  // timeout-46135f21: a signed command 10^7 samples ahead held the input for minutes).
+  const int64_t allowed_gap =
+      static_cast<int64_t>(std::ceil(config_.watchdog_s * e.status.sample_rate_hz)) + config_.block_samples;
+  if (command.first_sample - e.next_sample > allowed_gap)
+    return End(experiment_status_t::STATE_FAILED,
+               "command for samples from " + std::to_string(command.first_sample) + " while at sample " +
+                   std::to_string(e.next_sample) + ": a gap longer than the watchdog's " +
+                   std::to_string(config_.watchdog_s) + " s; safe input applied");
   while (e.next_sample < command.first_sample) {
     ++e.command_gaps;
     ApplySample(last_u_);

@@ -150,6 +150,28 @@ TEST_F(RigSecurity, ACommandFarBeyondTheSampleLimitEndsTheExperimentAtOnce) {
   EXPECT_EQ(transport_->counters().handler_errors, 0);
 }
 
+// fuzz_handlers timeout-46135f21: a signed command far ahead (but within max_samples) made the
+// rig hold its input over millions of "lost" samples. A gap is held only as long as the
+// watchdog would have let the rig wait: here 0.3 s × 100 Hz + one block (5) = 35 samples.
+TEST_F(RigSecurity, AGapLongerThanTheWatchdogAllowsEndsTheExperiment) {
+  actuator_command_t good = Command(40, 0, {0.5, 0.5, 0.5, 0.5, 0.5});
+  SignCommand(&good, kKey);
+  Send(good);
+  actuator_command_t near = Command(41, 5 + 35, {0.5});  // a gap of 35: held
+  SignCommand(&near, kKey);
+  Send(near);
+  ASSERT_TRUE(rig_->running());
+  actuator_command_t far = Command(42, 41 + 36, {0.5});  // a gap of 36: refused
+  SignCommand(&far, kKey);
+  Send(far);
+  EXPECT_FALSE(rig_->running());
+  EXPECT_EQ(last_status_.state, experiment_status_t::STATE_FAILED);
+  EXPECT_NE(last_status_.message.find("a gap longer than the watchdog"), std::string::npos)
+      << last_status_.message;
+  EXPECT_EQ(Samples(), 41);  // the five, the 35 held and the one of the near command
+  EXPECT_EQ(transport_->counters().handler_errors, 0);
+}
+
 TEST_F(RigSecurity, WatchdogAppliesTheSafeInputWhenCommandsStop) {
   actuator_command_t good = Command(30, 0, {0.4, 0.8, 1.2});
   SignCommand(&good, kKey);
