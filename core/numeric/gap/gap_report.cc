@@ -463,14 +463,15 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   // saturation), so while the best pair so far still leaves the validation records above the
   // independent noise floor, the search goes on from the next eligible effect (up to three
   // firsts); the pair with the lowest validation BIC is kept.
+  // Nothing is left for a second effect (or for more dynamics) when a fit already simulates the
+  // validation records within the independent noise floor (its MSE within two standard
+  // deviations of a χ²_N sample variance, σ²(1 + 2√(2/N))).
+  const bool floor_known = floor.method != "best_candidate_residual";
+  const double floor_mse = floor.sigma * floor.sigma * (1 + 2 * std::sqrt(2.0 / n_val));
+  auto within_floor = [&](double mse) { return floor_known && mse <= floor_mse; };
+  double verdict_val_mse = top.validation_mse;
   if (!unmodelled && v.effect != "ambiguous" && top.effect.kind != EffectKind::kNone &&
       options.second_effect) {
-    // Nothing is left for a second effect when a fit already simulates the validation records
-    // within the independent noise floor (its MSE within two standard deviations of a χ²_N
-    // sample variance, σ²(1 + 2√(2/N))).
-    const bool floor_known = floor.method != "best_candidate_residual";
-    const double floor_mse = floor.sigma * floor.sigma * (1 + 2 * std::sqrt(2.0 / n_val));
-    auto within_floor = [&](double mse) { return floor_known && mse <= floor_mse; };
     PairSearch best;
     int searched = 0;
     for (const CandidateWork& w : work) {
@@ -495,6 +496,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     }
     if (best.kept) {
       const CandidateFit& c = best.pair.fit;
+      verdict_val_mse = c.validation_mse;
       v.effect = EffectName(c.effects.front().kind);
       AdoptCandidate(c, v);
       if (searched > 1)
@@ -506,7 +508,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   // A static effect on G0 was better than the higher-order linear part alone, and no second
   // static effect explains the rest (no pair, or a lag/resonance/delay standing in for missing
   // dynamics): does the higher-order part with the static effect(s) found on it beat that?
-  if (!unmodelled && linear.beats_linear && v.effect != "ambiguous" &&
+  if (!unmodelled && linear.beats_linear && v.effect != "ambiguous" && !within_floor(verdict_val_mse) &&
       (v.effects.size() < 2 || IsLinearEffect(v.effects[1].kind)))
     unmodelled = AdoptHigherOrder(ctx, linear, top, report);
   std::vector<GapRecord> all_records = estimation;
