@@ -247,21 +247,13 @@ Eigen::VectorXd Candidate::Simulate(const Eigen::VectorXd& x, const GapRecord& r
   EffectSimulationOptions options;
   options.substeps = substeps_;
   std::vector<Effect> effects = Effects(x);
-  // Quantisation is applied last, as a smoothed staircase (below).
-  double q = 0, s = 0;
-  for (size_t i = 0; i < spec_.kinds.size(); ++i)
-    if (spec_.kinds[i] == EffectKind::kOutputQuantization) {
-      q = spec_.fixed[i].at(0);
-      s = q * std::exp(std::clamp(x(block_start_[i]), -12.0, 3.0));
-    }
+  // Quantisation is applied in Predict, after the nuisance (see there).
   effects.erase(std::remove_if(effects.begin(), effects.end(),
                                [](const Effect& e) { return e.kind == EffectKind::kOutputQuantization; }),
                 effects.end());
   const double du = InputOffset(x);
   const Eigen::VectorXd u = du != 0 ? Eigen::VectorXd(record.u.array() + du) : record.u;
-  Eigen::VectorXd y = SimulateWithEffects(Plant(x), effects, u, record.sample_time, options);
-  if (q > 0) SmoothedStaircase(y, q, s);
-  return y;
+  return SimulateWithEffects(Plant(x), effects, u, record.sample_time, options);
 }
 
 // Nuisance parameters by variable projection (Golub–Pereyra): the output offset and the free
@@ -296,6 +288,16 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
           free.cols() > 0 ? coef.tail(free.cols()).norm() / std::sqrt(double(free.cols())) : 0.0;
     }
   }
+  // Quantisation last, as a smoothed staircase on the lattice the samples sit on (φ + k·q, φ
+  // from the data: a sensor offset after the rounding puts it anywhere), so the output offset
+  // and the initial state are fitted to the unrounded prediction, whose error is zero-mean.
+  for (size_t i = 0; i < spec_.kinds.size(); ++i)
+    if (spec_.kinds[i] == EffectKind::kOutputQuantization) {
+      const double q = spec_.fixed[i].at(0), phase = spec_.fixed[i].size() > 1 ? spec_.fixed[i][1] : 0.0;
+      y.array() -= phase;
+      SmoothedStaircase(y, q, q * std::exp(std::clamp(x(block_start_[i]), -12.0, 3.0)));
+      y.array() += phase;
+    }
   if (nuisance) nuisance->input_offset = InputOffset(x);
   return y;
 }
@@ -440,7 +442,7 @@ std::vector<std::vector<double>> BestStarts(const FitContext& ctx, const Candida
 // Candidate quantisation steps: the mean resultant length R(q) = |mean exp(2πi y/q)| is near 1
 // when the samples sit on multiples of q (and on multiples of q/2, q/3, …), near 1/√N when not.
 // The largest q whose R is within half of the best is the step.
-double QuantisationStep(const std::vector<GapRecord>& records, double* strength) {
+double QuantisationStep(const std::vector<GapRecord>& records, double* strength, double* phase) {
   std::vector<double> y;
   for (const auto& r : records)
     for (long k = r.score_from; k < r.y.size(); ++k) y.push_back(r.y(k));
@@ -474,6 +476,12 @@ double QuantisationStep(const std::vector<GapRecord>& records, double* strength)
     if (r > refined_r) refined = q, refined_r = r;
   }
   *strength = refined_r;
+  if (phase) {
+    std::complex<double> sum = 0;
+    for (double v : y) sum += std::polar(1.0, 2 * M_PI * v / refined);
+    const double p = std::arg(sum) / (2 * M_PI) * refined;
+    *phase = p < 0 ? p + refined : p;
+  }
   return refined;
 }
 
@@ -486,12 +494,13 @@ CandidateSpec SpecFor(const FitContext& ctx, std::vector<EffectKind> kinds,
   // An actuator offset is a separate parameter only where it is not an output offset in
   // disguise: with a nonlinear effect (it moves the operating point on the nonlinearity), or on
   // an integrating plant (it makes a ramp). Before a linear stable plant, du ≡ b/G0(0).
-  // Coulomb friction does not see it either: a constant du only shifts the output (sign(ẏ)
-  // does not depend on it).
+  // Coulomb friction sees it: where the record starts stuck, du decides how far the drive
+  // must move before the axis breaks away. Quantisation does not: its lattice is placed in
+  // the measured coordinates (Predict).
   bool nonlinear = false;
   for (EffectKind k : spec.kinds)
     if (k != EffectKind::kNone && k != EffectKind::kParameterMismatch && !IsLinearEffect(k) &&
-        k != EffectKind::kCoulombFriction)
+        k != EffectKind::kOutputQuantization)
       nonlinear = true;
   spec.input_offset = ctx.integrating || nonlinear;
   return spec;
@@ -582,7 +591,8 @@ std::vector<std::vector<double>> LinearStarts(const FitContext& ctx, EffectKind 
   if (kind != EffectKind::kCubicStiffness && kind != EffectKind::kCoulombFriction &&
       kind != EffectKind::kSensorNonlinearity)
     return {};
-  const TransferFunction plant = base.Plant(x);
+  // The force acts on the mechanics (effects.h), so its regressor goes through that part only.
+  const TransferFunction plant = SplitAtForce(base.Plant(x)).mechanics;
   EffectSimulationOptions sim;
   sim.substeps = 1;
   std::vector<Eigen::VectorXd> columns_e, columns_a, columns_b;
@@ -593,12 +603,12 @@ std::vector<std::vector<double>> LinearStarts(const FitContext& ctx, EffectKind 
     const Eigen::VectorXd e = (r.y - y_hat).tail(n);
     Eigen::VectorXd a, b;
     if (kind == EffectKind::kCubicStiffness) {
-      // u_eff = u − k3 y³ ⇒ y − G u ≈ −k3·G(y³) (measured y, its offset removed).
+      // force −k3 y³ ⇒ y − G u ≈ −k3·G_mech(y³) (measured y, its offset removed).
       const Eigen::VectorXd yc = r.y.array() - nu.output_offset;
       a = SimulateWithEffect(plant, Effect{}, yc.array().cube().matrix(), r.sample_time, sim).tail(n);
       a = -a;
     } else if (kind == EffectKind::kCoulombFriction) {
-      // u_eff = u − F_c sign(ẏ) ⇒ y − G u ≈ −F_c·G(sign(dŷ/dt)) (velocity of the base prediction).
+      // force −F_c sign(ẏ) ⇒ y − G u ≈ −F_c·G_mech(sign(dŷ/dt)) (velocity of the base prediction).
       Eigen::VectorXd s(r.y.size());
       for (long k = 0; k < s.size(); ++k) {
         const double v = y_hat(std::min<long>(k + 1, s.size() - 1)) - y_hat(std::max<long>(k - 1, 0));
@@ -646,7 +656,7 @@ void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w) {
   // Sub-variants fixed before the fit: |y| for the sensor, the step for quantisation.
   std::vector<std::vector<double>> variants = {{}};
   if (kind == EffectKind::kSensorNonlinearity) variants = {{}, {1.0}};
-  if (kind == EffectKind::kOutputQuantization) variants = {{ctx.q_step}};
+  if (kind == EffectKind::kOutputQuantization) variants = {{ctx.q_step, ctx.q_phase}};
   // The refit as a base for the linear-in-parameters starts.
   const CandidateSpec refit_spec = SpecFor(ctx, {EffectKind::kParameterMismatch});
   const Candidate refit(*ctx.g0, refit_spec, ctx.scales, ctx.options->substeps);

@@ -66,7 +66,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
     const EffectKind k2 = seconds[i];
     std::vector<std::vector<double>> variants = {{}};
     if (k2 == EffectKind::kSensorNonlinearity) variants = {{}, {1.0}};
-    if (k2 == EffectKind::kOutputQuantization) variants = {{ctx.q_step}};
+    if (k2 == EffectKind::kOutputQuantization) variants = {{ctx.q_step, ctx.q_phase}};
     double best = INFINITY;
     for (const auto& fixed : variants) {
       CandidateSpec spec = SpecFor(ctx, {k1, k2}, {first.spec.fixed.front(), fixed});

@@ -64,6 +64,66 @@ double Sign(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0); }
 
 }  // namespace
 
+ForcePath SplitAtForce(const TransferFunction& plant) {
+  const TransferFunction g = Normalized(plant);
+  ForcePath out;
+  out.drive.num = Eigen::VectorXd::Ones(1);
+  out.drive.den = Eigen::VectorXd::Ones(1);
+  out.drive.delay_s = g.delay_s;
+  out.mechanics = g;
+  out.mechanics.delay_s = 0.0;
+  if (g.IsDiscrete()) return out;
+  const double scale = g.num.cwiseAbs().maxCoeff();
+  long lead = 0;
+  while (lead + 1 < g.num.size() && std::abs(g.num(lead)) <= 1e-12 * scale) ++lead;
+  const Eigen::VectorXd num = g.num.tail(g.num.size() - lead);
+  if (!(scale > 0.0) || g.Order() - (num.size() - 1) <= 2) return out;
+  // The mechanics: the slowest complex pair or the two slowest real poles, whichever is slower
+  // (geometric mean of |p|); integrators are the slowest real poles.
+  const Eigen::VectorXcd poles = PolynomialRoots(g.den);
+  const double size = poles.cwiseAbs().maxCoeff();
+  std::vector<long> real, pair;
+  for (long i = 0; i < poles.size(); ++i) {
+    if (std::abs(poles(i).imag()) <= 1e-9 * std::max(size, 1e-300))
+      real.push_back(i);
+    else if (poles(i).imag() > 0 && (pair.empty() || std::abs(poles(i)) < std::abs(poles(pair[0]))))
+      pair = {i};
+  }
+  std::sort(real.begin(), real.end(), [&](long a, long b) { return std::abs(poles(a)) < std::abs(poles(b)); });
+  double pair_speed = INFINITY, real_speed = INFINITY;
+  if (!pair.empty()) pair_speed = std::abs(poles(pair[0]));
+  if (real.size() >= 2) real_speed = std::sqrt(std::abs(poles(real[0])) * std::abs(poles(real[1])));
+  if (!std::isfinite(std::min(pair_speed, real_speed))) return out;
+  Eigen::VectorXcd mech(2), rest(poles.size() - 2);
+  std::vector<bool> used(poles.size(), false);
+  if (pair_speed <= real_speed) {
+    mech << poles(pair[0]), std::conj(poles(pair[0]));
+    used[pair[0]] = true;
+    // Its conjugate: the nearest pole to conj(p) not yet used.
+    long best = -1;
+    for (long i = 0; i < poles.size(); ++i)
+      if (!used[i] && (best < 0 || std::abs(poles(i) - mech(1)) < std::abs(poles(best) - mech(1)))) best = i;
+    used[best] = true;
+  } else {
+    mech << poles(real[0]), poles(real[1]);
+    used[real[0]] = used[real[1]] = true;
+  }
+  for (long i = 0, j = 0; i < poles.size(); ++i)
+    if (!used[i]) rest(j++) = poles(i);
+  // No split through a zero at s = 0 or an integrator left in the drive: drive(0) = 1 needs both.
+  for (long i = 0; i < rest.size(); ++i)
+    if (std::abs(rest(i)) <= 1e-9 * size) return out;
+  const Eigen::VectorXd rest_den = PolynomialFromRoots(rest), mech_den = PolynomialFromRoots(mech);
+  const double num0 = num(num.size() - 1), rest0 = rest_den(rest_den.size() - 1);
+  if (!(std::abs(num0) > 1e-9 * scale) || !(std::abs(rest0) > 0.0)) return out;
+  out.drive.num = num * (rest0 / num0);
+  out.drive.den = rest_den;
+  out.mechanics.num = Eigen::VectorXd::Constant(1, num0 / rest0);
+  out.mechanics.den = mech_den;
+  out.split = true;
+  return out;
+}
+
 const std::vector<EffectKind>& AllEffects() {
   static const std::vector<EffectKind> all = [] {
     std::vector<EffectKind> kinds;
@@ -196,23 +256,46 @@ EffectSimulator::EffectSimulator(const TransferFunction& plant, const std::vecto
     if (IsFeedbackEffect(e.kind)) feedback_ = true;
   }
   if (feedback_) {
-    // Friction and cubic stiffness act in feedback: u_eff depends on the plant's own state.
+    // Friction and cubic stiffness act in feedback: the force depends on the plant's own state.
+    // Continuous realisation with two inputs, u (through the drive) and the force w (into the
+    // mechanics): x = [x_drive; x_mech], x_mech' = A_m x_mech + B_m (C_d x_drive + w), y = C_m x_mech.
     TransferFunction undelayed = Normalized(linear);
     undelayed.delay_s = 0.0;
-    const StateSpace c = ToStateSpace(undelayed);
+    const ForcePath path = SplitAtForce(undelayed);
+    StateSpace c;
+    if (!path.split) {
+      c = ToStateSpace(undelayed);
+      c.B = (Eigen::MatrixXd(c.B.rows(), 2) << c.B.col(0), c.B.col(0)).finished();
+      c.D = (Eigen::MatrixXd(1, 2) << c.D(0, 0), c.D(0, 0)).finished();
+    } else {
+      const StateSpace d = ToStateSpace(path.drive), m = ToStateSpace(path.mechanics);
+      const long nd = d.A.rows(), nm = m.A.rows();
+      c.A = Eigen::MatrixXd::Zero(nd + nm, nd + nm);
+      c.A.topLeftCorner(nd, nd) = d.A;
+      c.A.bottomRightCorner(nm, nm) = m.A;
+      c.A.bottomLeftCorner(nm, nd) = m.B.col(0) * d.C.row(0);
+      c.B = Eigen::MatrixXd::Zero(nd + nm, 2);
+      c.B.col(0).head(nd) = d.B.col(0);
+      c.B.col(0).tail(nm) = m.B.col(0) * d.D(0, 0);
+      c.B.col(1).tail(nm) = m.B.col(0);
+      c.C = Eigen::MatrixXd::Zero(1, nd + nm);
+      c.C.rightCols(nm) = m.C.row(0);
+      c.D = Eigen::MatrixXd::Zero(1, 2);
+    }
     substeps_ = options.substeps;
-    const SampledPlant p = Sample(undelayed, sample_time / substeps_);
+    const StateSpace p = DiscretizeZoh(c, sample_time / substeps_);
     A_ = p.A;
-    B_ = p.B;
-    C_ = p.C;
-    D_ = p.D;
+    B_ = p.B.col(0);
+    force_B_ = p.B.col(1);
+    C_ = p.C.row(0);
+    D_ = p.D(0, 0);
     velocity_row_ = c.C.row(0) * c.A;
-    velocity_input_ = (c.C.row(0) * c.B.col(0))(0, 0);
+    velocity_input_ = (c.C.row(0) * c.B.col(1))(0, 0);
     // The stick rule needs the force to reach dy/dt within a sub-step: relative degree 1 or 2
-    // (C B ≠ 0 or C A B ≠ 0). Behind a further lag (degree ≥ 3) no input can stop the motion in
-    // one sub-step, and friction stays F_c·sign(dy/dt).
-    const double cab = velocity_row_.dot(c.B.col(0));
-    stick_ = velocity_input_ != 0.0 || std::abs(cab) > 1e-9 * velocity_row_.norm() * c.B.col(0).norm();
+    // from the force to y (C B ≠ 0 or C A B ≠ 0), which the split guarantees. Without it no
+    // force can stop the motion in one sub-step, and friction stays F_c·sign(dy/dt).
+    const double cab = velocity_row_.dot(c.B.col(1));
+    stick_ = velocity_input_ != 0.0 || std::abs(cab) > 1e-9 * velocity_row_.norm() * c.B.col(1).norm();
     delay_ = std::lround(linear.delay_s / sample_time);
   } else {
     const SampledPlant p = Sample(linear, sample_time);
@@ -220,6 +303,7 @@ EffectSimulator::EffectSimulator(const TransferFunction& plant, const std::vecto
     B_ = p.B;
     C_ = p.C;
     D_ = p.D;
+    force_B_ = B_;
     delay_ = p.delay;
   }
   Reset();
@@ -234,18 +318,18 @@ void EffectSimulator::Reset() {
 }
 
 // Coulomb friction as a set-valued force (Filippov; Karnopp's discrete stick rule): the force
-// f that brings dy/dt to zero at the end of this sub-step, f_stop = u − u_stop with
-// u_stop = −(v_row A x)/(v_row B + v_in), is applied when |f_stop| ≤ F_c (the axis stops or stays
-// stuck: static = kinetic friction); otherwise F_c·sign(f_stop), which opposes the motion the
-// sub-step would give. Unlike F_c·sign(dy/dt) this does not chatter at reversals, so the result
-// does not depend on the sub-step (a mass below its breakaway force does not creep). Only where
-// the input reaches dy/dt within a sub-step (relative degree ≤ 2, `stick_`).
-double EffectSimulator::FrictionForce(double u, double limit) const {
-  const double gain = velocity_row_.dot(B_) + velocity_input_;  // ∂(dy/dt)_next / ∂u
-  const double free = velocity_row_.dot(A_ * x_);                // (dy/dt)_next at u = 0
-  if (!stick_ || !(std::abs(gain) > 1e-300)) return limit * Sign(velocity_row_.dot(x_) + velocity_input_ * u);
-  const double stop = u + free / gain;  // u − u_stop
-  return std::clamp(stop, -limit, limit);
+// f that brings dy/dt to zero at the end of this sub-step, f_stop = v_next(0)/(v_row B_f + v_in)
+// with v_next(0) the velocity the sub-step gives without friction, is applied when
+// |f_stop| ≤ F_c (the axis stops or stays stuck: static = kinetic friction); otherwise
+// F_c·sign(f_stop), which opposes the motion the sub-step would give. Unlike F_c·sign(dy/dt)
+// this does not chatter at reversals, so the result does not depend on the sub-step (a mass
+// below its breakaway force does not creep). `w` is the other force on the mechanics (the
+// cubic spring's) in this sub-step.
+double EffectSimulator::FrictionForce(double u, double w, double limit) const {
+  const double gain = velocity_row_.dot(force_B_) + velocity_input_;  // ∂(dy/dt)_next / ∂f
+  const double moving = velocity_row_.dot(A_ * x_ + B_ * u + force_B_ * w) + velocity_input_ * (u + w);
+  if (!stick_ || !(std::abs(gain) > 1e-300)) return limit * Sign(velocity_row_.dot(x_) + velocity_input_ * (u + w));
+  return std::clamp(moving / gain, -limit, limit);
 }
 
 double EffectSimulator::Step(double u) {
@@ -273,17 +357,18 @@ double EffectSimulator::Step(double u) {
   if (feedback_) {
     y = 0.0;
     for (int j = 0; j < substeps_; ++j) {
-      double u_eff = u;
+      double w = 0.0;  // the feedback forces on the mechanics
       for (const Effect& e : effects_)
         if (e.kind == EffectKind::kCubicStiffness) {
           const double position = C_.dot(x_) + D_ * u;
-          u_eff -= e.params[0] * position * position * position;
+          w -= e.params[0] * position * position * position;
         }
       for (const Effect& e : effects_)
-        if (e.kind == EffectKind::kCoulombFriction) u_eff -= FrictionForce(u_eff, e.params[0]);
-      if (j == 0) y = C_.dot(x_) + D_ * u_eff;
+        if (e.kind == EffectKind::kCoulombFriction) w -= FrictionForce(u, w, e.params[0]);
+      if (j == 0) y = C_.dot(x_) + D_ * (u + w);
       next_.noalias() = A_ * x_;
-      next_ += B_ * u_eff;
+      next_ += B_ * u;
+      next_ += force_B_ * w;
       x_.swap(next_);
     }
   } else {

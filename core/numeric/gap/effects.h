@@ -14,9 +14,9 @@
 //   input_saturation       u_lo, u_hi                         y = G0 clip(u, u_lo, u_hi)
 //   dead_zone              d                                  u_eff = sign(u)·max(|u| − d, 0)
 //   backlash               r                                  w = max(u − r, min(u + r, w_prev))
-//   coulomb_friction       F_c                                u_eff = u − f, f = F_c·sign(dy/dt)
+//   coulomb_friction       F_c                                force −f on the mechanics, f = F_c·sign(dy/dt)
 //                                                             while sliding, |f| ≤ F_c stuck
-//   cubic_stiffness        k3                                 u_eff = u − k3·y³
+//   cubic_stiffness        k3                                 force −k3·y³ on the mechanics
 //   output_saturation      y_lo, y_hi                         y_m = clip(y, y_lo, y_hi)
 //   sensor_nonlinearity    a1, a2, a3, absolute               y_m = a1 y + a2 y² + a3 y³,
 //                                                             or a1·|y| when absolute != 0
@@ -24,7 +24,9 @@
 //
 // Simulation is sampled with a zero-order hold on u at Ts; the feedback effects (friction,
 // cubic stiffness) are integrated with `substeps` ZOH sub-steps per sample, dy/dt taken from
-// the continuous state (C A x + C B u_eff). Everything here is Eigen-only and I/O-free.
+// the continuous state. They act where a force acts: on the mechanics (SplitAtForce below) —
+// the plant's input when its relative degree is ≤ 2, else the input of its slowest two poles
+// behind the rest of the plant (the drive). Everything here is Eigen-only and I/O-free.
 #include <Eigen/Dense>
 #include <string>
 #include <vector>
@@ -71,6 +73,19 @@ void ValidateEffect(const Effect& effect);
 // G0 with a linear effect folded in (delay, lag or resonance); other effects return G0.
 TransferFunction ApplyLinearEffect(const TransferFunction& plant, const Effect& effect);
 
+// G0 = drive·mechanics, where the feedback effects' force acts. Relative degree ≤ 2: the force
+// acts at G0's input (drive = 1, split = false). Higher: friction at the input of a lag chain
+// would be a relay behind a filter — no Filippov sliding, and a result that depends on the
+// integration step — so the plant is split at the mass: `mechanics` = the slowest two poles
+// (a complex pair, or two real poles, integrators first) with the static gain, `drive` = the
+// rest with the zeros, drive(0) = 1, so F_c and k3 stay in units of u. When that split does not
+// exist (a zero at s = 0, more than two integrators) the force acts at G0's input.
+struct ForcePath {
+  TransferFunction drive, mechanics;
+  bool split = false;
+};
+ForcePath SplitAtForce(const TransferFunction& plant);
+
 struct EffectSimulationOptions {
   int substeps = 4;  // ZOH sub-steps per sample for the feedback effects
 };
@@ -93,15 +108,16 @@ class EffectSimulator {
   const std::vector<Effect>& effects() const { return effects_; }
 
  private:
-  // The friction force on the plant's input in this sub-step for driving input u (effects.cc).
-  double FrictionForce(double u, double limit) const;
+  // The friction force on the mechanics in this sub-step for driving input u and other force w
+  // (effects.cc).
+  double FrictionForce(double u, double w, double limit) const;
 
   std::vector<Effect> effects_;
   bool feedback_ = false;
-  bool stick_ = false;  // friction by the stick rule (relative degree ≤ 2), else F_c·sign(dy/dt)
+  bool stick_ = false;  // friction by the stick rule (force to velocity within a sub-step), else F_c·sign(dy/dt)
   int substeps_ = 1;
   Eigen::MatrixXd A_;
-  Eigen::VectorXd B_, x_, next_;
+  Eigen::VectorXd B_, force_B_, x_, next_;  // force_B_: where the feedback force enters
   Eigen::RowVectorXd C_, velocity_row_;
   double D_ = 0.0, velocity_input_ = 0.0;
   long delay_ = 0;

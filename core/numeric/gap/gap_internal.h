@@ -138,8 +138,9 @@ FitOutcome Minimise(const Residuals& residuals, Eigen::VectorXd x, int max_evalu
 // Starting points (physical units) for each effect, from the data's scales.
 std::vector<std::vector<double>> Starts(EffectKind kind, const Scales& s);
 
-// Candidate quantisation step from the samples' lattice; *strength = its mean resultant length.
-double QuantisationStep(const std::vector<GapRecord>& records, double* strength);
+// Candidate quantisation step from the samples' lattice; *strength = its mean resultant length,
+// *phase ∈ [0, q) where the lattice sits (phase + k·q: a sensor offset after the rounding).
+double QuantisationStep(const std::vector<GapRecord>& records, double* strength, double* phase = nullptr);
 // In place: y → E[q·round((y + n)/q)], n ~ N(0, s²) (the quantisation candidate's predictor).
 void SmoothedStaircase(Eigen::VectorXd& y, double q, double s);
 
@@ -175,7 +176,7 @@ struct FitContext {
   bool integrating = false;                     // G0 integrates: du in every candidate
   int refit_size = 0;
   int as_is_size = 0;                           // fitted parameters of `none` (du when integrating)
-  double q_step = 0, q_strength = 0;
+  double q_step = 0, q_strength = 0, q_phase = 0;  // the output lattice: q_phase + k·q_step
   int k_effects = 1;                            // effects tested (Bonferroni)
 };
 

@@ -159,6 +159,59 @@ TEST(EffectsTest, CoulombFrictionStopsAMassWhereTheClosedFormSays) {
   }
 }
 
+// A drive lag in front of a damped mass: G = 1/(τs + 1) · 1/(s(s + c)), relative degree 3.
+static TransferFunction LagThenMass(double tau, double c, double gain = 1.0) {
+  TransferFunction plant;
+  plant.num = Eigen::VectorXd::Constant(1, gain / tau);
+  plant.den = Eigen::Vector4d(1.0, c + 1.0 / tau, c / tau, 0.0);
+  return plant;
+}
+
+TEST(EffectsTest, AboveRelativeDegreeTwoTheForceActsOnTheSlowestTwoPoles) {
+  // The mass 1/(s(s + c)) and the drive 1/(τs + 1) are recovered from their product, drive(0) = 1
+  // (the gain stays with the mechanics), and their product is the plant again.
+  const double tau = 0.05, c = 2.0, gain = 3.0;
+  const ForcePath path = SplitAtForce(LagThenMass(tau, c, gain));
+  ASSERT_TRUE(path.split);
+  ASSERT_EQ(path.mechanics.den.size(), 3);
+  EXPECT_NEAR(path.mechanics.den(1), c, 1e-9);
+  EXPECT_NEAR(path.mechanics.den(2), 0.0, 1e-9);
+  EXPECT_NEAR(path.mechanics.num(0), gain, 1e-9);
+  EXPECT_NEAR(std::abs(FrequencyResponse(path.drive, 0.0)), 1.0, 1e-12);
+  for (double w : {0.1, 1.0, 30.0})
+    EXPECT_NEAR(std::abs(FrequencyResponse(path.drive, w) * FrequencyResponse(path.mechanics, w) -
+                         FrequencyResponse(LagThenMass(tau, c, gain), w)),
+                0.0, 1e-9 * std::abs(FrequencyResponse(LagThenMass(tau, c, gain), w)));
+  // A complex pair slower than the real pole is the mechanics; relative degree 2 is not split.
+  TransferFunction resonant;
+  resonant.num = Eigen::VectorXd::Constant(1, 50.0);
+  resonant.den = PolynomialFromRoots((Eigen::VectorXcd(3) << std::complex<double>(-0.5, 3.0),
+                                      std::complex<double>(-0.5, -3.0), -20.0).finished());
+  const ForcePath r = SplitAtForce(resonant);
+  ASSERT_TRUE(r.split);
+  EXPECT_NEAR(r.mechanics.den(1), 1.0, 1e-9);
+  EXPECT_NEAR(r.mechanics.den(2), 9.25, 1e-9);
+  EXPECT_FALSE(SplitAtForce(FirstOrder(1.0, 1.0)).split);
+}
+
+TEST(EffectsTest, FrictionBehindADriveLagHoldsBelowBreakawayAndSlidesAtTheClosedFormSpeed) {
+  // Friction acts on the mass behind the lag: at constant u the drive's force tends to u, so
+  // below F_c the mass does not move, above it the speed settles at (u − F_c)/c —
+  // and neither depends on the sub-step (a relay behind the lag would chatter by the sub-step).
+  const double tau = 0.05, c = 2.0, friction = 0.3, ts = 0.01;
+  for (int substeps : {1, 4, 16}) {
+    const Eigen::VectorXd held = SimulateWithEffect(LagThenMass(tau, c), {EffectKind::kCoulombFriction, {friction}},
+                                                    Eigen::VectorXd::Constant(500, 0.25), ts, {substeps});
+    // The friction force is held over a sub-step while the drive's force still rises, so the
+    // mass is brought back to rest at each sub-step's end: a creep of second order in the
+    // sub-step (2·10⁻⁶ at one sub-step, where the mass without friction would travel ~15).
+    EXPECT_LT(held.cwiseAbs().maxCoeff(), 3e-6 / (substeps * substeps)) << substeps << " sub-steps";
+    const Eigen::VectorXd y = SimulateWithEffect(LagThenMass(tau, c), {EffectKind::kCoulombFriction, {friction}},
+                                                 Eigen::VectorXd::Constant(2000, 1.0), ts, {substeps});
+    EXPECT_NEAR((y(1999) - y(1998)) / ts, (1.0 - friction) / c, 1e-6) << substeps << " sub-steps";
+  }
+}
+
 TEST(EffectsTest, BadEffectsAreRejectedWithTheirNames) {
   const auto plant = FirstOrder(1.0, 1.0);
   const Eigen::VectorXd u = Eigen::VectorXd::Ones(10);
