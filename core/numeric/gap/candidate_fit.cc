@@ -442,7 +442,7 @@ std::vector<std::vector<double>> BestStarts(const FitContext& ctx, const Candida
 // Candidate quantisation steps: the mean resultant length R(q) = |mean exp(2πi y/q)| is near 1
 // when the samples sit on multiples of q (and on multiples of q/2, q/3, …), near 1/√N when not.
 // The largest q whose R is within half of the best is the step.
-double QuantisationStep(const std::vector<GapRecord>& records, double* strength, double* phase) {
+double QuantisationStep(const std::vector<GapRecord>& records, double* strength) {
   std::vector<double> y;
   for (const auto& r : records)
     for (long k = r.score_from; k < r.y.size(); ++k) y.push_back(r.y(k));
@@ -476,12 +476,6 @@ double QuantisationStep(const std::vector<GapRecord>& records, double* strength,
     if (r > refined_r) refined = q, refined_r = r;
   }
   *strength = refined_r;
-  if (phase) {
-    std::complex<double> sum = 0;
-    for (double v : y) sum += std::polar(1.0, 2 * M_PI * v / refined);
-    const double p = std::arg(sum) / (2 * M_PI) * refined;
-    *phase = p < 0 ? p + refined : p;
-  }
   return refined;
 }
 

@@ -138,9 +138,8 @@ FitOutcome Minimise(const Residuals& residuals, Eigen::VectorXd x, int max_evalu
 // Starting points (physical units) for each effect, from the data's scales.
 std::vector<std::vector<double>> Starts(EffectKind kind, const Scales& s);
 
-// Candidate quantisation step from the samples' lattice; *strength = its mean resultant length,
-// *phase ∈ [0, q) where the lattice sits (phase + k·q: a sensor offset after the rounding).
-double QuantisationStep(const std::vector<GapRecord>& records, double* strength, double* phase = nullptr);
+// Candidate quantisation step from the samples' lattice; *strength = its mean resultant length.
+double QuantisationStep(const std::vector<GapRecord>& records, double* strength);
 // In place: y → E[q·round((y + n)/q)], n ~ N(0, s²) (the quantisation candidate's predictor).
 void SmoothedStaircase(Eigen::VectorXd& y, double q, double s);
 

@@ -377,7 +377,8 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   ctx.as_is_size = as_is.Size();
   ctx.refit_fit = refit_fit;
   ctx.refit_size = refit.Size();
-  ctx.q_step = QuantisationStep(estimation, &ctx.q_strength, &ctx.q_phase);
+  ctx.q_step = QuantisationStep(estimation, &ctx.q_strength);
+  ctx.q_phase = DetectOutputLattice(estimation, ctx.q_step, 0.0).offset;  // a sensor offset after the rounding
   ctx.k_effects = std::max<int>(1, static_cast<int>(kinds.size()) - 2);
   auto fit_one = [&](EffectKind kind) {
     CandidateWork w;

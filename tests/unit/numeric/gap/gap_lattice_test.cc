@@ -4,9 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 #include "core/numeric/gap/gap_bench.h"
+#include "core/numeric/gap/gap_diagnosis.h"
 #include "core/numeric/gap/gap_internal.h"
 #include "core/numeric/gap/gap_noise.h"
 
@@ -91,6 +93,36 @@ TEST(GapLatticeTest, SmoothedStaircaseIsTheConditionalMeanOfTheRoundedNoisyValue
       }
       ASSERT_NEAR(fast(k), q * mean, 1e-9 * q) << "sigma " << sigma << ", y " << y(k);
     }
+  }
+}
+
+TEST(GapLatticeTest, QuantisationIsNamedWhereverASensorOffsetPutsTheLattice) {
+  // A sensor offset after the ADC moves the lattice to offset + k·q. The quantisation
+  // candidate's staircase must sit where the samples do, not at multiples of q: the same
+  // records shifted by a third and a half of a step are still quantised.
+  std::mt19937_64 rng(12);
+  GapCaseOptions options;
+  options.samples = 2000;
+  options.excitation = "levels";
+  options.snr_db = 40;  // noise before the rounding well below q: the staircase is sharp
+  const GapCase c = MakeGapCase(EffectKind::kOutputQuantization, rng, options);
+  const double q = c.effect.params[0];
+  ASSERT_LT(c.noise_sigma, 0.2 * q);
+  for (double shift : {q / 3, q / 2}) {
+    GapRecord est = c.estimation, val = c.validation;
+    est.y.array() += shift;
+    val.y.array() += shift;
+    const GapReport report = DiagnoseGap(c.sim, {est}, {val});
+    EXPECT_EQ(report.verdict.effect, "output_quantization") << "shift " << shift / q << " q";
+    // And the candidate itself explains the rounding: a staircase in the wrong place is no
+    // better than the linear refit (its smoothing grows until it is a straight line).
+    double quantised = NAN, linear = NAN;
+    for (const CandidateFit& f : report.ranking) {
+      if (f.effect.kind == EffectKind::kOutputQuantization) quantised = f.validation_mse;
+      if (f.effect.kind == EffectKind::kParameterMismatch) linear = f.validation_mse;
+    }
+    std::printf("shift %.3f q: validation MSE quantisation %.3g, linear refit %.3g\n", shift / q, quantised, linear);
+    EXPECT_LT(quantised, 0.7 * linear) << "shift " << shift / q << " q";
   }
 }
 
