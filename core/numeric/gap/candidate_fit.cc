@@ -417,20 +417,25 @@ std::vector<std::vector<double>> GridStarts(EffectKind kind, const Scales& s) {
   return grid;
 }
 
+// A starting point: the prefix (plant, du, the earlier effects' φ) and the last effect's start.
+static Eigen::VectorXd StartPoint(const Candidate& cand, const Eigen::VectorXd& prefix, const std::vector<double>& start) {
+  const size_t last = cand.Blocks() - 1;
+  Eigen::VectorXd x0 = Eigen::VectorXd::Zero(cand.Size());
+  const long head = std::min<long>(prefix.size(), cand.BlockStart(last));
+  x0.head(head) = prefix.head(head);
+  if (cand.BlockSize(last) > 0) x0.segment(cand.BlockStart(last), cand.BlockSize(last)) = cand.Phi(last, start);
+  return x0;
+}
+
 std::vector<std::vector<double>> BestStarts(const FitContext& ctx, const CandidateSpec& spec,
                                             const Eigen::VectorXd& prefix,
                                             const std::vector<std::vector<double>>& starts, size_t keep) {
   if (starts.size() <= keep) return starts;
   const Candidate cand(*ctx.g0, spec, ctx.scales, ctx.options->substeps);
   const Residuals residuals{&cand, ctx.estimation, ctx.n_est};
-  const size_t last = cand.Blocks() - 1;
   std::vector<std::pair<double, size_t>> scored;
   for (size_t i = 0; i < starts.size(); ++i) {
-    Eigen::VectorXd x0 = Eigen::VectorXd::Zero(cand.Size());
-    const long head = std::min<long>(prefix.size(), cand.BlockStart(last));
-    x0.head(head) = prefix.head(head);
-    if (cand.BlockSize(last) > 0) x0.segment(cand.BlockStart(last), cand.BlockSize(last)) = cand.Phi(last, starts[i]);
-    const double mse = Mse(residuals, x0);
+    const double mse = Mse(residuals, StartPoint(cand, prefix, starts[i]));
     scored.push_back({std::isfinite(mse) ? mse : INFINITY, i});
   }
   std::sort(scored.begin(), scored.end());
@@ -506,16 +511,11 @@ void FitSpec(const FitContext& ctx, const CandidateSpec& spec,
   const GapOptions& options = *ctx.options;
   Candidate cand(*ctx.g0, spec, ctx.scales, options.substeps);
   Residuals residuals{&cand, ctx.estimation, ctx.n_est};
-  const size_t last = cand.Blocks() - 1;
   FitOutcome best;
   int evaluations = 0;
   for (const Eigen::VectorXd& prefix : prefixes)
     for (const auto& start : starts) {
-      Eigen::VectorXd x0 = Eigen::VectorXd::Zero(cand.Size());
-      x0.head(std::min<long>(prefix.size(), cand.BlockStart(last))) =
-          prefix.head(std::min<long>(prefix.size(), cand.BlockStart(last)));
-      if (cand.BlockSize(last) > 0) x0.segment(cand.BlockStart(last), cand.BlockSize(last)) = cand.Phi(last, start);
-      FitOutcome f = Minimise(residuals, x0, options.evaluations_per_start * (cand.Size() + 1));
+      FitOutcome f = Minimise(residuals, StartPoint(cand, prefix, start), options.evaluations_per_start * (cand.Size() + 1));
       evaluations += f.evaluations;
       if (!(f.mse >= best.mse)) best = f;  // also takes the first (best.mse is NaN)
     }
