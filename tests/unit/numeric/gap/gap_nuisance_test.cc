@@ -76,7 +76,8 @@ INSTANTIATE_TEST_SUITE_P(Rigs, OffsetTest,
                          ::testing::Values(OffsetCase{EffectKind::kNone, 301},
                                            OffsetCase{EffectKind::kDeadZone, 302},
                                            OffsetCase{EffectKind::kCubicStiffness, 303},
-                                           OffsetCase{EffectKind::kOutputSaturation, 304}),
+                                           OffsetCase{EffectKind::kOutputSaturation, 304},
+                                           OffsetCase{EffectKind::kCoulombFriction, 305}),
                          [](const auto& info) { return std::string(EffectName(info.param.truth)); });
 
 TEST(GapIntegratingTest, FrictionOnAPositionFromForcePlantIsFrictionNotAFlexibleWrongEffect) {
