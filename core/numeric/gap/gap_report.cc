@@ -508,9 +508,12 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   }
   // A static effect on G0 was better than the higher-order linear part alone, and no second
   // static effect explains the rest (no pair, or a lag/resonance/delay standing in for missing
-  // dynamics): does the higher-order part with the static effect(s) found on it beat that?
+  // dynamics, first or second): does the higher-order part with the static effect(s) found on it
+  // beat that?
+  const bool linear_stand_in = std::any_of(v.effects.begin(), v.effects.end(),
+                                           [](const Effect& e) { return IsLinearEffect(e.kind); });
   if (!unmodelled && linear.beats_linear && v.effect != "ambiguous" && !within_floor(verdict_val_mse) &&
-      (v.effects.size() < 2 || IsLinearEffect(v.effects[1].kind)))
+      (v.effects.size() < 2 || linear_stand_in))
     unmodelled = AdoptHigherOrder(ctx, linear, top, report);
   std::vector<GapRecord> all_records = estimation;
   all_records.insert(all_records.end(), validation.begin(), validation.end());
