@@ -367,8 +367,11 @@ std::vector<std::vector<double>> Starts(EffectKind kind, const Scales& s) {
       return starts;
     }
     case EffectKind::kInputSaturation:
+      // Both limits in the data, or one beyond it (a one-sided limit: from two-sided starts the
+      // far limit stays caught inside the data, a worse local minimum).
       return {{s.u_quantile[0], s.u_quantile[4]}, {s.u_quantile[1], s.u_quantile[3]},
-              {0.5 * (s.u_quantile[1] + s.u_quantile[2]), 0.5 * (s.u_quantile[2] + s.u_quantile[3])}};
+              {0.5 * (s.u_quantile[1] + s.u_quantile[2]), 0.5 * (s.u_quantile[2] + s.u_quantile[3])},
+              {s.u_quantile[0] - 2 * um, s.u_quantile[3]}, {s.u_quantile[1], s.u_quantile[4] + 2 * um}};
     case EffectKind::kDeadZone:
     case EffectKind::kBacklash:
     case EffectKind::kCoulombFriction:
@@ -644,6 +647,36 @@ std::vector<std::vector<double>> LinearStarts(const FitContext& ctx, EffectKind 
   }
 }
 
+// An input limit that few estimation samples reach (under 2 %: a multilevel record's lowest
+// level, clipped a little, which the plant's gain and offset make up for) is barely seen by the
+// fit, which leaves it wherever it ended — often at the edge of the estimation records, where
+// it clips validation samples that reach further. A limit the data do not show is no limit: it is moved
+// beyond all records (estimation and validation) and the fit polished from there, kept when
+// the estimation MSE stays within two standard deviations of a χ² sample variance.
+static void ReleaseUnreachedLimits(const FitContext& ctx, CandidateWork& w) {
+  const double lo = w.fit.effect.params[0], hi = w.fit.effect.params[1], du = w.fit.input_offset;
+  long below = 0, above = 0, n = 0;
+  double v_min = INFINITY, v_max = -INFINITY;
+  for (const auto* records : {ctx.estimation, ctx.validation})
+    for (const GapRecord& r : *records)
+      for (long k = r.score_from; k < r.u.size(); ++k) {
+        const double v = r.u(k) + du;
+        v_min = std::min(v_min, v);
+        v_max = std::max(v_max, v);
+        if (records == ctx.estimation) ++n, below += v < lo, above += v > hi;
+      }
+  const long few = std::max<long>(3, static_cast<long>(0.02 * n));  // the lowest of ~50 levels
+  const double span = v_max - v_min;
+  const bool free_lo = below < few && lo > v_min - span, free_hi = above < few && hi < v_max + span;
+  if (!(span > 0) || (!free_lo && !free_hi) || (free_lo && free_hi)) return;
+  CandidateWork trial;
+  FitSpec(ctx, w.spec, {w.x}, {{free_lo ? v_min - 2 * span : lo, free_hi ? v_max + 2 * span : hi}}, trial);
+  if (!(trial.fit.estimation_mse <= w.fit.estimation_mse * (1 + 2 * std::sqrt(2.0 / std::max<long>(1, n))))) return;
+  trial.fit.evaluations += w.fit.evaluations;
+  trial.fit.note = std::string(free_lo ? "lower" : "upper") + " limit not reached by the estimation records: none assumed";
+  w = std::move(trial);
+}
+
 void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w) {
   const std::vector<GapRecord>& estimation = *ctx.estimation;
   (void)estimation;
@@ -679,6 +712,7 @@ void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w) {
     }
   }
   w.fit.evaluations = evaluations;
+  if (kind == EffectKind::kInputSaturation) ReleaseUnreachedLimits(ctx, w);
   if (kind == EffectKind::kOutputQuantization)
     w.fit.note = "step from the samples' lattice, strength R = " + std::to_string(ctx.q_strength);
 }

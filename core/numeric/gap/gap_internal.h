@@ -158,6 +158,7 @@ struct CandidateWork {
   Eigen::VectorXd y_val;
   Eigen::VectorXd x;             // fitted parameter vector
   CandidateSpec spec;            // what was fitted
+  bool masked = false;           // not eligible: the same map as a better-named candidate (note says)
 };
 
 // Everything the candidates share: the data, the scales, G0 and its refit.
@@ -205,6 +206,8 @@ std::vector<std::vector<double>> LinearStarts(const FitContext& ctx, EffectKind 
 void ScoreCandidate(const FitContext& ctx, CandidateWork& w);
 // Sorts `work` best first (eligible, then validation BIC) and returns the ranking.
 std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const GapOptions& options);
+// Masks a dead zone that is an input limit in disguise (ranking.cc), before RankCandidates.
+void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& work);
 
 // effect_pairs.cc: forward selection of a second effect after `first` (an eligible single
 // effect), each other effect added to it and refitted together; a pair is kept when it passes

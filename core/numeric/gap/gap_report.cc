@@ -401,6 +401,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   std::vector<CandidateWork> work(kinds.size());
   ParallelFor(kinds.size(), options.threads, [&](size_t i) { work[i] = fit_one(kinds[i]); },
               [&](size_t i) { return std::string("fitting ") + EffectName(kinds[i]); });
+  MaskOneSidedDeadZone(ctx, work);
   report.ranking = RankCandidates(work, options);
 
   // Noise floor, estimated without the candidates (gap_noise.h); records too short for it fall

@@ -3,6 +3,7 @@
 // check, then eligibility, ordering and BIC weights.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "core/numeric/gap/gap_internal.h"
 #include "core/numeric/validation.h"
@@ -60,6 +61,45 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
   }
 }
 
+// A dead zone of half-width d after an actuator offset du is flat for u + du ∈ [−d, d]. When the
+// records reach past only one end of that (under 1 % of the samples beyond the other), they show
+// one kink: a slope on one side, flat on the other — over the data the same map as a one-sided
+// input limit, with one parameter fewer (the limit beyond the data is no parameter), so BIC
+// always prefers the dead zone. Which name is physics: a dead zone is the actuator doing
+// nothing about its zero command; when the flat part does not contain u = 0 the response stops
+// away from zero, which is a limit. The dead zone is then masked (not eligible, with a note)
+// when input_saturation simulates the validation records as well (its MSE within two standard
+// deviations of a χ² sample variance of the dead zone's, σ²(1 + 2√(2/N))).
+void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& work) {
+  CandidateWork *dead = nullptr, *limit = nullptr;
+  for (auto& w : work) {
+    if (w.fit.effect.kind == EffectKind::kDeadZone && w.fit.effects.size() == 1) dead = &w;
+    if (w.fit.effect.kind == EffectKind::kInputSaturation && w.fit.effects.size() == 1) limit = &w;
+  }
+  if (!dead || !limit || !limit->fit.significant || dead->fit.effect.params.empty()) return;
+  const double d = dead->fit.effect.params[0], du = dead->fit.input_offset;
+  long below = 0, above = 0, total = 0;
+  for (const auto* records : {ctx.estimation, ctx.validation})
+    for (const GapRecord& r : *records)
+      for (long k = r.score_from; k < r.u.size(); ++k, ++total) {
+        below += r.u(k) + du < -d;
+        above += r.u(k) + du > d;
+      }
+  const bool one_sided = std::min(below, above) < 0.01 * total && std::max(below, above) >= 0.01 * total;
+  const bool flat_holds_zero = std::abs(du) <= d;  // u = 0 inside u + du ∈ [−d, d]
+  const double tolerance = 1 + 2 * std::sqrt(2.0 / std::max<long>(1, ctx.n_val));
+  if (!one_sided || flat_holds_zero || !(limit->fit.validation_mse <= dead->fit.validation_mse * tolerance)) return;
+  char line[300];
+  std::snprintf(line, sizeof line,
+                "one-sided over the records: only the kink at u = %.4g is reached, the flat part "
+                "[%.4g, %.4g] lies away from zero command; the same map as an input limit, which "
+                "input_saturation fits as well (validation MSE %.4g against %.4g)",
+                below < above ? d - du : -d - du, -d - du, d - du, limit->fit.validation_mse,
+                dead->fit.validation_mse);
+  dead->masked = true;
+  dead->fit.note = line;
+}
+
 std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const GapOptions& options) {
   // Eligibility: an effect must beat the refitted G0 significantly and reproduce the gap's
   // signature; parameter_mismatch must beat G0; none is always eligible.
@@ -67,7 +107,7 @@ std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const
     CandidateFit& c = w.fit;
     if (c.effect.kind == EffectKind::kNone) c.eligible = true;
     else if (c.effect.kind == EffectKind::kParameterMismatch) c.eligible = c.significant;
-    else c.eligible = c.significant && c.signature >= options.min_signature;
+    else c.eligible = c.significant && c.signature >= options.min_signature && !w.masked;
   }
   std::sort(work.begin(), work.end(), [](const CandidateWork& a, const CandidateWork& b) {
     if (a.fit.eligible != b.fit.eligible) return a.fit.eligible;

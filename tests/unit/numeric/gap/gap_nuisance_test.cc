@@ -110,6 +110,37 @@ TEST(GapIntegratingTest, FrictionOnAPositionFromForcePlantIsFrictionNotAFlexible
   EXPECT_NEAR(v.params.params[0], friction.params[0], 0.2 * friction.params[0]);
 }
 
+TEST(GapOffsetTest, AOneSidedLimitIsNamedASaturationNotADeadZoneWithALargeOffset) {
+  // Only the upper limit is reached (the lower one lies far below the data). Over the data that
+  // is one kink, which a dead zone with an actuator offset as large as its flat part fits as
+  // well with one parameter fewer; a limit is the name for a response that stops away from
+  // zero command (ranking.cc, MaskOneSidedDeadZone).
+  GapCase c = LevelsCase(EffectKind::kInputSaturation, 306);
+  const double u_max = c.estimation.u.cwiseAbs().maxCoeff();
+  const Effect limit{EffectKind::kInputSaturation, {-10 * u_max, 0.45 * u_max}};
+  std::mt19937_64 rng(307);
+  for (GapRecord* r : {&c.estimation, &c.validation}) {
+    r->y = SimulateWithEffect(c.real, limit, r->u, r->sample_time);
+    const double sigma = Rms(r->y.array() - r->y.mean()) * std::pow(10.0, -30.0 / 20);
+    std::normal_distribution<double> noise(0.0, sigma);
+    for (long k = 0; k < r->y.size(); ++k) r->y(k) += noise(rng);
+  }
+  AddOffsets(c, 0.2 * Rms(c.estimation.u), 0.5 * Rms(c.estimation.y));
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation});
+  for (const CandidateFit& f : report.ranking)
+    if (f.effect.kind == EffectKind::kDeadZone || f.effect.kind == EffectKind::kInputSaturation)
+      std::printf("%s: eligible %d, estimation MSE %.4g, validation MSE %.4g, du %.4f %s\n", EffectName(f.effect.kind),
+                  f.eligible, f.estimation_mse, f.validation_mse, f.input_offset, f.note.c_str());
+  EXPECT_EQ(report.verdict.effect, "input_saturation");
+  ASSERT_FALSE(report.verdict.effects.empty());
+  const Effect& named = report.verdict.effects.front();
+  ASSERT_EQ(named.kind, EffectKind::kInputSaturation);
+  // The limit in command units (u_hi − du: an actuator offset and the limits trade against the
+  // output offset) is where the records show it.
+  EXPECT_NEAR(named.params[1] - report.verdict.nuisance.input_offset, 0.45 * u_max - 0.2 * Rms(c.estimation.u),
+              0.05 * u_max);
+}
+
 struct PairCase {
   EffectKind first, second;
   uint64_t seed;
