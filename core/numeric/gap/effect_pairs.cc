@@ -103,6 +103,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   std::vector<const CandidateWork*> passing;
   for (CandidateWork& w : pairs) {
     CandidateFit& c = w.fit;
+    if (c.effects.size() < 2) continue;
     const int dof = std::max(1, c.parameters - one.parameters);
     c.likelihood_ratio = ctx.n_est * std::log(one.estimation_mse / std::max(c.estimation_mse, 1e-300));
     c.lr_threshold = ChiSquareQuantile(1 - options.significance / ctx.k_effects, dof);
@@ -112,7 +113,12 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
     c.bic = ctx.n_val * std::log(std::max(c.validation_mse, 1e-300)) +
             c.parameters * std::log(double(ctx.n_est));
     c.signature = Correlation(w.y_val - first.y_val, ctx.y_val - first.y_val);
-    c.eligible = c.significant && c.signature >= options.min_signature;
+  }
+  MaskOneSidedDeadZone(ctx, pairs, 1);  // a one-sided second limit is a limit (ranking.cc)
+  for (CandidateWork& w : pairs) {
+    CandidateFit& c = w.fit;
+    if (c.effects.size() < 2) continue;
+    c.eligible = c.significant && c.signature >= options.min_signature && !w.masked;
     if (c.eligible && c.bic < std::min(one.bic, top_bic) - options.ambiguity_bic) passing.push_back(&w);
   }
   // The lowest validation BIC; but a pair with fewer parameters whose validation residuals are

@@ -206,8 +206,9 @@ std::vector<std::vector<double>> LinearStarts(const FitContext& ctx, EffectKind 
 void ScoreCandidate(const FitContext& ctx, CandidateWork& w);
 // Sorts `work` best first (eligible, then validation BIC) and returns the ranking.
 std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const GapOptions& options);
-// Masks a dead zone that is an input limit in disguise (ranking.cc), before RankCandidates.
-void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& work);
+// Masks a dead zone that is an input limit in disguise (ranking.cc), before RankCandidates;
+// `slot`: where the two stand among the candidates' effects (1 for the second of a pair).
+void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& work, size_t slot = 0);
 
 // effect_pairs.cc: forward selection of a second effect after `first` (an eligible single
 // effect), each other effect added to it and refitted together; a pair is kept when it passes

@@ -70,14 +70,15 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
 // away from zero, which is a limit. The dead zone is then masked (not eligible, with a note)
 // when input_saturation simulates the validation records as well (its MSE within two standard
 // deviations of a χ² sample variance of the dead zone's, σ²(1 + 2√(2/N))).
-void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& work) {
+void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& work, size_t slot) {
   CandidateWork *dead = nullptr, *limit = nullptr;
   for (auto& w : work) {
-    if (w.fit.effect.kind == EffectKind::kDeadZone && w.fit.effects.size() == 1) dead = &w;
-    if (w.fit.effect.kind == EffectKind::kInputSaturation && w.fit.effects.size() == 1) limit = &w;
+    if (w.fit.effects.size() != slot + 1) continue;
+    if (w.fit.effects[slot].kind == EffectKind::kDeadZone) dead = &w;
+    if (w.fit.effects[slot].kind == EffectKind::kInputSaturation) limit = &w;
   }
-  if (!dead || !limit || !limit->fit.significant || dead->fit.effect.params.empty()) return;
-  const double d = dead->fit.effect.params[0], du = dead->fit.input_offset;
+  if (!dead || !limit || !limit->fit.significant || dead->fit.effects[slot].params.empty()) return;
+  const double d = dead->fit.effects[slot].params[0], du = dead->fit.input_offset;
   long below = 0, above = 0, total = 0;
   for (const auto* records : {ctx.estimation, ctx.validation})
     for (const GapRecord& r : *records)
