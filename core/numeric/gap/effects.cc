@@ -291,6 +291,9 @@ EffectSimulator::EffectSimulator(const TransferFunction& plant, const std::vecto
     D_ = p.D(0, 0);
     velocity_row_ = c.C.row(0) * c.A;
     velocity_input_ = (c.C.row(0) * c.B.col(1))(0, 0);
+    velocity_next_ = velocity_row_ * A_;  // (dy/dt) after one sub-step = v·(A x + B u + B_f w)
+    velocity_drive_ = velocity_row_.dot(B_);
+    velocity_force_ = velocity_row_.dot(force_B_);
     // The stick rule needs the force to reach dy/dt within a sub-step: relative degree 1 or 2
     // from the force to y (C B ≠ 0 or C A B ≠ 0), which the split guarantees. Without it no
     // force can stop the motion in one sub-step, and friction stays F_c·sign(dy/dt).
@@ -326,9 +329,9 @@ void EffectSimulator::Reset() {
 // below its breakaway force does not creep). `w` is the other force on the mechanics (the
 // cubic spring's) in this sub-step.
 double EffectSimulator::FrictionForce(double u, double w, double limit) const {
-  const double gain = velocity_row_.dot(force_B_) + velocity_input_;  // ∂(dy/dt)_next / ∂f
-  const double moving = velocity_row_.dot(A_ * x_ + B_ * u + force_B_ * w) + velocity_input_ * (u + w);
+  const double gain = velocity_force_ + velocity_input_;  // ∂(dy/dt)_next / ∂f
   if (!stick_ || !(std::abs(gain) > 1e-300)) return limit * Sign(velocity_row_.dot(x_) + velocity_input_ * (u + w));
+  const double moving = velocity_next_.dot(x_) + velocity_drive_ * u + velocity_force_ * w + velocity_input_ * (u + w);
   return std::clamp(moving / gain, -limit, limit);
 }
 

@@ -118,7 +118,8 @@ class EffectSimulator {
   int substeps_ = 1;
   Eigen::MatrixXd A_;
   Eigen::VectorXd B_, force_B_, x_, next_;  // force_B_: where the feedback force enters
-  Eigen::RowVectorXd C_, velocity_row_;
+  Eigen::RowVectorXd C_, velocity_row_, velocity_next_;
+  double velocity_drive_ = 0.0, velocity_force_ = 0.0;
   double D_ = 0.0, velocity_input_ = 0.0;
   long delay_ = 0;
   std::vector<double> delay_line_;
