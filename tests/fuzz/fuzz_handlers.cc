@@ -21,7 +21,6 @@
 
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,21 +33,14 @@
 #include "services/catalog/catalog_service.h"
 #include "services/excite/excite_service.h"
 #include "services/rig_sim/rig_sim.h"
+#include "tests/fuzz/fuzz_bus.h"
 
 namespace {
 using namespace idrig;
+using namespace idrig::fuzz;
 
 const char* kRig = "sim1";
 const char* kWorker = "worker-fuzz";
-
-HmacKey MakeKey(uint8_t salt) {
-  HmacKey key(32);
-  for (size_t i = 0; i < key.size(); ++i) key[i] = static_cast<uint8_t>(i * 37 + salt * 101 + 11);
-  return key;
-}
-const HmacKey& CommandKey() { static const HmacKey k = MakeKey(1); return k; }
-const HmacKey& OperatorKey() { static const HmacKey k = MakeKey(2); return k; }
-const HmacKey& ServiceKey() { static const HmacKey k = MakeKey(3); return k; }
 
 struct Bus {
   std::unique_ptr<Transport> transport = MakeLcmTransport("memq://");
@@ -95,33 +87,13 @@ EnvelopeSigner& ServiceSigner() {
 }
 
 template <class T>
-std::vector<uint8_t> WithFingerprint(const uint8_t* payload, size_t size) {
-  std::vector<uint8_t> bytes(8 + size);
-  const uint64_t hash = static_cast<uint64_t>(T::getHash());
-  for (int i = 0; i < 8; ++i) bytes[i] = static_cast<uint8_t>(hash >> (56 - 8 * i));
-  std::copy(payload, payload + size, bytes.begin() + 8);
-  return bytes;
-}
-
-template <class T>
 void PublishSigned(Bus& bus, EnvelopeSigner& signer, ChannelKind kind, const uint8_t* payload,
                    size_t size) {
-  const std::string channel = Channel(kRig, kind);
-  const std::vector<uint8_t> sealed =
-      signer.SealBytes(channel, T::getTypeName(), WithFingerprint<T>(payload, size));
-  bus.transport->Publish(channel, sealed.data(), sealed.size());
+  fuzz::PublishSigned<T>(*bus.transport, signer, Channel(kRig, kind), payload, size);
 }
 
 void PublishCommand(Bus& bus, const uint8_t* payload, size_t size) {
-  std::vector<uint8_t> bytes = WithFingerprint<actuator_command_t>(payload, size);
-  actuator_command_t command;
-  if (Decode(bytes.data(), bytes.size(), &command, nullptr)) {  // sign it as excite would
-    command.key_id = 1;
-    SignCommand(&command, CommandKey());
-    bytes.resize(command.getEncodedSize());
-    command.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  }
-  bus.transport->Publish(Channel(kRig, ChannelKind::kCommand), bytes.data(), bytes.size());
+  fuzz::PublishCommand(*bus.transport, Channel(kRig, ChannelKind::kCommand), payload, size);
 }
 
 void Dispatch(Bus& bus, uint8_t selector, const uint8_t* payload, size_t size) {
@@ -135,12 +107,10 @@ void Dispatch(Bus& bus, uint8_t selector, const uint8_t* payload, size_t size) {
     case 2:
       return PublishSigned<model_result_t>(bus, ServiceSigner(), ChannelKind::kResult, payload,
                                            size);
-    case 3: {  // unsigned by design (status is a snapshot anyone may read)
-      const auto bytes = WithFingerprint<experiment_status_t>(payload, size);
-      bus.transport->Publish(Channel(kRig, ChannelKind::kExperimentStatus), bytes.data(),
-                             bytes.size());
-      return;
-    }
+    case 3:  // unsigned by design (status is a snapshot anyone may read)
+      return PublishPlain<experiment_status_t>(*bus.transport,
+                                               Channel(kRig, ChannelKind::kExperimentStatus),
+                                               payload, size);
     case 4:
       return PublishSigned<experiment_request_t>(bus, OperatorSigner(),
                                                  ChannelKind::kExperimentRequest, payload, size);
@@ -183,17 +153,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   Bus& bus = *shared;
   const int64_t errors_before = bus.transport->counters().handler_errors;
-  size_t pos = 0;
-  while (pos < size) {
-    const uint8_t selector = data[pos++];
-    size_t length = 0;
-    if (pos + 2 <= size) length = (size_t(data[pos]) << 8) | data[pos + 1];
-    pos = std::min(pos + 2, size);
-    length = std::min(length, size - pos);
-    Dispatch(bus, selector, data + pos, length);
-    pos += length;
+  ForEachMessage(data, size, [&](uint8_t selector, const uint8_t* payload, size_t length) {
+    Dispatch(bus, selector, payload, length);
     bus.Pump();
-  }
+  });
   if (bus.transport->counters().handler_errors > errors_before) {
     std::fprintf(stderr, "an exception escaped a handler (handler_errors %lld)\n",
                  static_cast<long long>(bus.transport->counters().handler_errors.load()));
@@ -203,28 +166,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 }
 
 namespace {
-
-class SeedWriter {
- public:
-  template <class T>
-  SeedWriter& Add(uint8_t selector, const T& message) {
-    std::vector<uint8_t> bytes(message.getEncodedSize());
-    message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-    const size_t length = bytes.size() - 8;
-    out_.push_back(selector);
-    out_.push_back(static_cast<uint8_t>(length >> 8));
-    out_.push_back(static_cast<uint8_t>(length));
-    out_.insert(out_.end(), bytes.begin() + 8, bytes.end());
-    return *this;
-  }
-  void Save(const std::string& path) const {
-    std::ofstream(path, std::ios::binary)
-        .write(reinterpret_cast<const char*>(out_.data()), static_cast<std::streamsize>(out_.size()));
-  }
-
- private:
-  std::vector<uint8_t> out_;
-};
 
 experiment_status_t RigStatus(int64_t experiment, int32_t state) {
   experiment_status_t s{};

@@ -112,6 +112,9 @@ SeriesLogarithm ContinuousFromDiscreteBySeries(const Eigen::MatrixXd& Phi,
                                                const Eigen::VectorXd& Gamma, double sample_time,
                                                int terms) {
   if (!(sample_time > 0.0)) throw std::invalid_argument("series logarithm: T must be positive");
+  // Eigen's matrix logarithm (the cross-check below) reads past its buffer on a NaN entry.
+  if (!Phi.allFinite() || !Gamma.allFinite())
+    throw std::invalid_argument("series logarithm: Phi or Gamma has a NaN or Inf entry");
   const int n = static_cast<int>(Phi.rows());
   const Eigen::MatrixXd E = Eigen::MatrixXd::Identity(n, n);
   SeriesLogarithm out;
@@ -141,10 +144,15 @@ SeriesLogarithm ContinuousFromDiscreteBySeries(const Eigen::MatrixXd& Phi,
                                 : std::numeric_limits<double>::infinity();
   // B* = (Φ − E)⁻¹ A* Γ, Eq. (1.16).
   out.B = (Phi - E).fullPivLu().solve(out.A * Gamma);
-  // Cross-check against Eigen's matrix logarithm (principal branch).
-  const Eigen::MatrixXd log_phi = Phi.log() / sample_time;
-  out.truncation_error = log_phi.allFinite() ? (out.A - log_phi).cwiseAbs().maxCoeff()
-                                             : std::numeric_limits<double>::infinity();
+  // Cross-check against Eigen's matrix logarithm (principal branch), where the series converged:
+  // rho(X) < 1 puts every eigenvalue of Phi in the open right half-plane, where the principal
+  // logarithm exists. On a singular Phi Eigen's square-root loop (matrix_log_compute_big) never
+  // ends (tests/fuzz/fuzz_worker_logger timeout-351249dd: a worker held by one request).
+  out.truncation_error = std::numeric_limits<double>::infinity();
+  if (out.converged) {
+    const Eigen::MatrixXd log_phi = Phi.log() / sample_time;
+    if (log_phi.allFinite()) out.truncation_error = (out.A - log_phi).cwiseAbs().maxCoeff();
+  }
   return out;
 }
 
