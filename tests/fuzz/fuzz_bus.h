@@ -4,9 +4,14 @@
 // signs it as the holder of the role's key would), the input's framing
 // [selector][length, 2 bytes big-endian][payload]..., and the seed files in that framing.
 #include <idrig/actuator_command_t.hpp>
+#include <idrig/identify_claim_t.hpp>
+#include <idrig/identify_request_t.hpp>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -79,6 +84,68 @@ void ForEachMessage(const uint8_t* data, size_t size, F on_message) {
     on_message(selector, data + pos, length);
     pos += length;
   }
+}
+
+// LLVMFuzzerInitialize of a handler target: a handler's exception is logged at error level;
+// IDRIG_FUZZ_WRITE_SEEDS=DIR writes the target's seed corpus (valid message chains) and exits.
+inline void InitHandlerTarget(void (*write_seeds)(const std::string& dir)) {
+  spdlog::set_level(spdlog::level::err);
+  if (const char* dir = std::getenv("IDRIG_FUZZ_WRITE_SEEDS")) {
+    write_seeds(dir);
+    std::exit(0);
+  }
+}
+
+// An exception out of a handler (counted in handler_errors: DESIGN.md says handlers never
+// throw) is a finding.
+inline void AbortOnHandlerErrors(Transport& transport, int64_t errors_before) {
+  const int64_t errors = transport.counters().handler_errors;
+  if (errors <= errors_before) return;
+  std::fprintf(stderr, "an exception escaped a handler (handler_errors %lld)\n",
+               static_cast<long long>(errors));
+  std::abort();
+}
+
+// Seed messages.
+inline identify_request_t SeedIdentify(const std::string& rig, int64_t request, int64_t experiment,
+                                       const std::string& method, const std::string& options) {
+  identify_request_t r{};
+  r.request_id = request;
+  r.rig_id = rig;
+  r.experiment_id = experiment;
+  r.method = method;
+  r.options_json = options;
+  r.requested_by = "fuzz";
+  return r;
+}
+
+inline identify_claim_t SeedClaim(const std::string& rig, int64_t request, int32_t kind,
+                                  const std::string& worker, double lease_s = 0) {
+  identify_claim_t c{};
+  c.request_id = request;
+  c.rig_id = rig;
+  c.kind = kind;
+  c.worker_id = worker;
+  c.attempt = 1;
+  c.lease_s = lease_s;
+  return c;
+}
+
+// n samples at 100 Hz from `first`, u[i] = u_of(i).
+template <class U>
+actuator_command_t SeedCommand(const std::string& rig, int64_t seq, int64_t experiment,
+                               int64_t first, int32_t flags, int n, U u_of) {
+  actuator_command_t c{};
+  c.seq = seq;
+  c.key_id = 1;
+  c.rig_id = rig;
+  c.experiment_id = experiment;
+  c.first_sample = first;
+  c.sample_rate_hz = 100;
+  c.flags = flags;
+  c.n_samples = n;
+  for (int i = 0; i < n; ++i) c.u.push_back(u_of(i));
+  return c;
 }
 
 // A seed: messages in the input's framing (each the LCM encoding without its fingerprint).

@@ -131,11 +131,7 @@ void WriteSeeds(const std::string& dir);
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  spdlog::set_level(spdlog::level::err);  // a handler's exception is logged at error level
-  if (const char* dir = std::getenv("IDRIG_FUZZ_WRITE_SEEDS")) {
-    WriteSeeds(dir);
-    std::exit(0);
-  }
+  InitHandlerTarget(WriteSeeds);
   return 0;
 }
 
@@ -157,11 +153,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     Dispatch(bus, selector, payload, length);
     bus.Pump();
   });
-  if (bus.transport->counters().handler_errors > errors_before) {
-    std::fprintf(stderr, "an exception escaped a handler (handler_errors %lld)\n",
-                 static_cast<long long>(bus.transport->counters().handler_errors.load()));
-    std::abort();
-  }
+  AbortOnHandlerErrors(*bus.transport, errors_before);
   return 0;
 }
 
@@ -180,27 +172,7 @@ experiment_status_t RigStatus(int64_t experiment, int32_t state) {
   return s;
 }
 
-identify_request_t Identify(int64_t request, int64_t experiment, const std::string& method,
-                            const std::string& options) {
-  identify_request_t r{};
-  r.request_id = request;
-  r.rig_id = kRig;
-  r.experiment_id = experiment;
-  r.method = method;
-  r.options_json = options;
-  r.requested_by = "fuzz";
-  return r;
-}
 
-identify_claim_t Claim(int64_t request) {
-  identify_claim_t c{};
-  c.request_id = request;
-  c.rig_id = kRig;
-  c.kind = identify_claim_t::KIND_CLAIM;
-  c.worker_id = kWorker;
-  c.attempt = 1;
-  return c;
-}
 
 model_result_t Result(int64_t request, int64_t experiment, const std::string& method, bool ok,
                       const std::string& report) {
@@ -238,18 +210,14 @@ experiment_request_t Experiment(int64_t request, int64_t experiment, int32_t act
   return r;
 }
 
+
 actuator_command_t Command(int64_t seq, int64_t experiment, int64_t first, int32_t flags, int n) {
-  actuator_command_t c{};
-  c.seq = seq;
-  c.key_id = 1;
-  c.rig_id = kRig;
-  c.experiment_id = experiment;
-  c.first_sample = first;
-  c.sample_rate_hz = 100;
-  c.flags = flags;
-  c.n_samples = n;
-  for (int i = 0; i < n; ++i) c.u.push_back(0.5 * ((i / 3) % 2 ? 1 : -1));
-  return c;
+  return SeedCommand(kRig, seq, experiment, first, flags, n,
+                     [](int i) { return 0.5 * ((i / 3) % 2 ? 1 : -1); });
+}
+
+identify_claim_t Claim(int64_t request) {
+  return SeedClaim(kRig, request, identify_claim_t::KIND_CLAIM, kWorker);
 }
 
 void WriteSeeds(const std::string& dir) {
@@ -263,21 +231,21 @@ void WriteSeeds(const std::string& dir) {
   SeedWriter()
       .Add(3, RigStatus(7, done))
       .Add(3, from_excite)
-      .Add(0, Identify(11, 7, "arx", "{}"))
+      .Add(0, SeedIdentify(kRig, 11, 7, "arx", "{}"))
       .Add(1, Claim(11))
       .Add(2, Result(11, 7, "arx", true, report))
       .Add(1, Claim(11))
       .Save(dir + "/catalog_job_stored");
   SeedWriter()
       .Add(3, RigStatus(7, done))
-      .Add(0, Identify(12, 7, "n4sid", R"({"order":2})"))
+      .Add(0, SeedIdentify(kRig, 12, 7, "n4sid", R"({"order":2})"))
       .Add(1, Claim(12))
       .Add(2, Result(12, 7, "n4sid", false, "{}"))
       .Save(dir + "/catalog_job_failed");
   SeedWriter()
       .Add(3, RigStatus(8, experiment_status_t::STATE_INTERRUPTED))
-      .Add(0, Identify(13, 8, "arx", "{}"))
-      .Add(0, Identify(14, 8, "arx", R"({"segment":"longest_complete"})"))
+      .Add(0, SeedIdentify(kRig, 13, 8, "arx", "{}"))
+      .Add(0, SeedIdentify(kRig, 14, 8, "arx", R"({"segment":"longest_complete"})"))
       .Add(1, Claim(14))
       .Save(dir + "/catalog_interrupted");
   const std::string gap =
@@ -285,12 +253,12 @@ void WriteSeeds(const std::string& dir) {
       R"(,"details":{"format":"idrig.gap/1","effects":[{"effect":"backlash","params":{"r":0.1}}]}})";
   SeedWriter()
       .Add(3, RigStatus(9, done))
-      .Add(0, Identify(15, 9, "gap-diagnose", "{}"))
+      .Add(0, SeedIdentify(kRig, 15, 9, "gap-diagnose", "{}"))
       .Add(1, Claim(15))
       .Add(2, Result(15, 9, "gap-diagnose", true, gap))
       .Save(dir + "/catalog_gap_report");
   SeedWriter()
-      .Add(0, Identify(16, 99, "nonsense", "[]"))
+      .Add(0, SeedIdentify(kRig, 16, 99, "nonsense", "[]"))
       .Add(2, Result(17, 7, "arx", true, report))
       .Save(dir + "/catalog_refusals");
   const int32_t start = experiment_request_t::ACTION_START, stop = experiment_request_t::ACTION_STOP;

@@ -156,11 +156,7 @@ void WriteSeeds(const std::string& dir);
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  spdlog::set_level(spdlog::level::err);  // a handler's exception is logged at error level
-  if (const char* dir = std::getenv("IDRIG_FUZZ_WRITE_SEEDS")) {
-    WriteSeeds(dir);
-    std::exit(0);
-  }
+  InitHandlerTarget(WriteSeeds);
   std::atexit([] {
     std::error_code ignored;
     std::filesystem::remove_all(TempDir(), ignored);
@@ -188,11 +184,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
                  static_cast<long long>(bus.worker->jobs_done()),
                  static_cast<long long>(bus.logger->stored_blocks()),
                  bus.worker->Details().dump().c_str(), bus.logger->Details().dump().c_str());
-  if (bus.transport->counters().handler_errors > 0) {
-    std::fprintf(stderr, "an exception escaped a handler (handler_errors %lld)\n",
-                 static_cast<long long>(bus.transport->counters().handler_errors.load()));
-    std::abort();
-  }
+  AbortOnHandlerErrors(*bus.transport, 0);
   return 0;
 }
 
@@ -234,32 +226,11 @@ experiment_status_t RigStatus(int64_t experiment, int32_t state, int64_t blocks,
   s.sample_rate_hz = 100;
   s.samples_done = s.samples_total = samples;
   s.blocks_total = blocks;
-  s.message = state == experiment_status_t::STATE_INTERRUPTED ? "samples 20..39 missing" : "";
+  s.message = state == experiment_status_t::STATE_INTERRUPTED ? "samples 10..19 missing" : "";
   return s;
 }
 
-identify_request_t Identify(int64_t request, int64_t experiment, const std::string& method,
-                            const std::string& options) {
-  identify_request_t r{};
-  r.request_id = request;
-  r.rig_id = kRig;
-  r.experiment_id = experiment;
-  r.method = method;
-  r.options_json = options;
-  r.requested_by = "fuzz";
-  return r;
-}
 
-identify_claim_t Claim(int64_t request, int32_t kind, const std::string& worker) {
-  identify_claim_t c{};
-  c.request_id = request;
-  c.rig_id = kRig;
-  c.kind = kind;
-  c.worker_id = worker;
-  c.attempt = 1;
-  c.lease_s = 10;
-  return c;
-}
 
 result_ack_t Ack(int64_t request) {
   result_ack_t a{};
@@ -270,19 +241,6 @@ result_ack_t Ack(int64_t request) {
   return a;
 }
 
-actuator_command_t Command(int64_t seq, int64_t experiment, int64_t first, int32_t flags, int n) {
-  actuator_command_t c{};
-  c.seq = seq;
-  c.key_id = 1;
-  c.rig_id = kRig;
-  c.experiment_id = experiment;
-  c.first_sample = first;
-  c.sample_rate_hz = 100;
-  c.flags = flags;
-  c.n_samples = n;
-  for (int i = 0; i < n; ++i) c.u.push_back(i % 3 ? 1.0 : -1.0);
-  return c;
-}
 
 replay_request_t ReplayRequest(int64_t id, int64_t experiment, std::vector<int64_t> have) {
   replay_request_t r{};
@@ -304,14 +262,23 @@ replay_done_t ReplayDone(int64_t experiment, bool ended, bool complete, int64_t 
   d.ended = ended;
   d.complete = complete;
   d.blocks_total = blocks;
-  d.samples_total = blocks * 20;
+  d.samples_total = blocks * 10;
   return d;
+}
+
+actuator_command_t Command(int64_t seq, int64_t experiment, int64_t first, int32_t flags, int n) {
+  return SeedCommand(kRig, seq, experiment, first, flags, n,
+                     [](int i) { return i % 3 ? 1.0 : -1.0; });
+}
+
+identify_claim_t Claim(int64_t request, int32_t kind, const std::string& worker) {
+  return SeedClaim(kRig, request, kind, worker, 10);
 }
 
 void WriteSeeds(const std::string& dir) {
   const int32_t done = experiment_status_t::STATE_DONE;
   const int32_t grant = identify_claim_t::KIND_GRANT;
-  const auto blocks = Blocks(7, 4, 20);  // 80 samples: a seed fits in the target's 2 KB
+  const auto blocks = Blocks(7, 4, 10);  // 40 samples: a seed fits in the target's 1.5 KB
   // A job from request to acknowledged result, for three methods.
   for (const auto& [name, method, options] :
        std::vector<std::tuple<std::string, std::string, std::string>>{
@@ -320,57 +287,57 @@ void WriteSeeds(const std::string& dir) {
            {"worker_job_step_prony", "step-prony", "{}"}}) {
     SeedWriter seed;
     for (const auto& b : blocks) seed.Add(4, b);
-    seed.Add(6, RigStatus(7, done, 4, 80))
-        .Add(0, Identify(11, 7, method, options))
+    seed.Add(6, RigStatus(7, done, 4, 40))
+        .Add(0, SeedIdentify(kRig, 11, 7, method, options))
         .Add(2, Claim(11, grant, kWorker))
         .Add(3, Ack(11))
         .Save(dir + "/" + name);
   }
   {  // The record arrives after the grant: the worker asks the logger for a replay.
     SeedWriter seed;
-    seed.Add(1, Identify(12, 7, "arx", "{}")).Add(2, Claim(12, grant, kWorker));
+    seed.Add(1, SeedIdentify(kRig, 12, 7, "arx", "{}")).Add(2, Claim(12, grant, kWorker));
     for (const auto& b : blocks) seed.Add(4, b);
-    seed.Add(6, RigStatus(7, done, 4, 80)).Add(3, Ack(12)).Save(dir + "/worker_record_late");
+    seed.Add(6, RigStatus(7, done, 4, 40)).Add(3, Ack(12)).Save(dir + "/worker_record_late");
   }
   {  // Blocks replayed to the worker alone, and the logger's answer named by replay_done.
     SeedWriter seed;
-    seed.Add(0, Identify(13, 7, "arx", R"({"order":2})")).Add(2, Claim(13, grant, kWorker));
+    seed.Add(0, SeedIdentify(kRig, 13, 7, "arx", R"({"order":2})")).Add(2, Claim(13, grant, kWorker));
     for (const auto& b : blocks) seed.Add(5, b);
     // (replay_done's replay_id is the worker's own, which the fuzzer does not know: ignored)
     seed.Add(7, ReplayDone(7, true, true, 4))
-        .Add(6, RigStatus(7, done, 4, 80))
+        .Add(6, RigStatus(7, done, 4, 40))
         .Add(3, Ack(13))
         .Save(dir + "/worker_replayed");
   }
   {  // An interrupted experiment: refused, then asked for the longest complete segment.
     SeedWriter seed;
     for (int i = 0; i < 2; ++i) seed.Add(4, blocks[i]);
-    seed.Add(6, RigStatus(7, experiment_status_t::STATE_INTERRUPTED, 2, 40))
-        .Add(0, Identify(14, 7, "arx", "{}"))
+    seed.Add(6, RigStatus(7, experiment_status_t::STATE_INTERRUPTED, 2, 20))
+        .Add(0, SeedIdentify(kRig, 14, 7, "arx", "{}"))
         .Add(2, Claim(14, grant, kWorker))
         .Add(3, Ack(14))
-        .Add(0, Identify(15, 7, "arx", R"({"segment":"longest_complete","order":1})"))
+        .Add(0, SeedIdentify(kRig, 15, 7, "arx", R"({"segment":"longest_complete","order":1})"))
         .Add(2, Claim(15, grant, kWorker))
         .Save(dir + "/worker_interrupted");
   }
   // Claims the worker must not act on: a denial, a grant to another worker, done elsewhere.
   SeedWriter()
-      .Add(0, Identify(16, 7, "arx", "{}"))
+      .Add(0, SeedIdentify(kRig, 16, 7, "arx", "{}"))
       .Add(2, Claim(16, identify_claim_t::KIND_DENY, "worker-other"))
-      .Add(0, Identify(17, 7, "arx", "{}"))
+      .Add(0, SeedIdentify(kRig, 17, 7, "arx", "{}"))
       .Add(2, Claim(17, grant, "worker-other"))
-      .Add(0, Identify(18, 7, "nonsense", "[]"))
+      .Add(0, SeedIdentify(kRig, 18, 7, "nonsense", "[]"))
       .Add(2, Claim(18, grant, kWorker))
       .Add(2, Claim(18, identify_claim_t::KIND_DONE, "worker-other"))
       .Add(3, Ack(18))
       .Save(dir + "/worker_claims");
   {  // The logger: commands and blocks with a gap, the rig's end, and a replay for someone else.
     SeedWriter seed;
-    seed.Add(8, Command(1, 9, 0, 0, 20)).Add(8, Command(2, 9, 20, 0, 20));
-    const auto b9 = Blocks(9, 3, 20);
+    seed.Add(8, Command(1, 9, 0, 0, 10)).Add(8, Command(2, 9, 10, 0, 10));
+    const auto b9 = Blocks(9, 3, 10);
     seed.Add(4, b9[0]).Add(4, b9[2]);
-    seed.Add(8, Command(3, 9, 40, actuator_command_t::FLAG_FINAL, 20))
-        .Add(6, RigStatus(9, done, 3, 60))
+    seed.Add(8, Command(3, 9, 20, actuator_command_t::FLAG_FINAL, 10))
+        .Add(6, RigStatus(9, done, 3, 30))
         .Add(9, ReplayRequest(5, 9, {0}))
         .Add(9, ReplayRequest(6, 9, {}))
         .Save(dir + "/logger_gap_replay");
@@ -383,7 +350,7 @@ void WriteSeeds(const std::string& dir) {
         .Add(6, excite)
         .Add(4, blocks[0])
         .Add(9, ReplayRequest(7, 99, {}))
-        .Add(6, RigStatus(10, experiment_status_t::STATE_STOPPED, 1, 20))
+        .Add(6, RigStatus(10, experiment_status_t::STATE_STOPPED, 1, 10))
         .Save(dir + "/logger_status_unknown_replay");
   }
 }

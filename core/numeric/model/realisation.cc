@@ -124,7 +124,11 @@ SeriesLogarithm ContinuousFromDiscreteBySeries(const Eigen::MatrixXd& Phi,
   const Eigen::MatrixXd X2 = X * X;
   Eigen::MatrixXd power = X;  // X^{2k+1}
   Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(n, n);
-  const int max_terms = terms > 0 ? terms : 10000;
+  // Automatic (terms <= 0): to machine precision, at most 10 000 terms; a series that diverges
+  // (rho(X) >= 1, or not a number) is not summed: its terms grow, and 10 000 of them only
+  // overflowed (most of a worker's job on such a model, tests/fuzz/fuzz_worker_logger).
+  const bool divergent = !(out.spectral_radius_x < 1.0);
+  const int max_terms = terms > 0 ? terms : (divergent ? 1 : 10000);
   int k = 0;
   for (; k < max_terms; ++k) {
     const Eigen::MatrixXd term = power / (2.0 * k + 1.0);

@@ -66,8 +66,7 @@ struct SeriesLogarithm {
   double spectral_radius_x = 0.0;  // ρ(X); the series diverges for ρ(X) >= 1
   bool converged = false;
   double tail_bound = 0.0;        // bound on the omitted tail: ‖X‖^{2K+1}/((2K+1)(1−‖X‖²))·2/T
-  // max |A* − log(Φ)/T| against Eigen's matrix logarithm (Inf where the series diverges)
-  double truncation_error = 0.0;
+  double truncation_error = 0.0;  // max |A* − log(Φ)/T| against Eigen's matrix logarithm
 };
 SeriesLogarithm ContinuousFromDiscreteBySeries(const Eigen::MatrixXd& Phi,
                                                const Eigen::VectorXd& Gamma, double sample_time,

@@ -70,6 +70,7 @@ TEST(MethodLimits, TheSeriesLogarithmOfASingularPhiReturns) {
   EXPECT_FALSE(s.converged);
   EXPECT_NEAR(s.spectral_radius_x, 1.0, 1e-12);  // X = (Phi - E)(Phi + E)^-1 has eigenvalue -1
   EXPECT_TRUE(std::isinf(s.truncation_error));
+  EXPECT_EQ(s.terms, 1);  // a divergent series is not summed to 10 000 terms
   // A convergent case keeps its cross-check: Phi = e^{-T} I, log Phi / T = -I exactly.
   const Eigen::MatrixXd decay = std::exp(-0.1) * Eigen::MatrixXd::Identity(2, 2);
   const SeriesLogarithm c = ContinuousFromDiscreteBySeries(decay, Eigen::VectorXd::Ones(2), 0.1, 0);
