@@ -172,8 +172,6 @@ experiment_status_t RigStatus(int64_t experiment, int32_t state) {
   return s;
 }
 
-
-
 model_result_t Result(int64_t request, int64_t experiment, const std::string& method, bool ok,
                       const std::string& report) {
   model_result_t m{};
@@ -209,7 +207,6 @@ experiment_request_t Experiment(int64_t request, int64_t experiment, int32_t act
   r.requested_by = "fuzz";
   return r;
 }
-
 
 actuator_command_t Command(int64_t seq, int64_t experiment, int64_t first, int32_t flags, int n) {
   return SeedCommand(kRig, seq, experiment, first, flags, n,

@@ -230,8 +230,6 @@ experiment_status_t RigStatus(int64_t experiment, int32_t state, int64_t blocks,
   return s;
 }
 
-
-
 result_ack_t Ack(int64_t request) {
   result_ack_t a{};
   a.request_id = request;
@@ -240,7 +238,6 @@ result_ack_t Ack(int64_t request) {
   a.worker_id = kWorker;
   return a;
 }
-
 
 replay_request_t ReplayRequest(int64_t id, int64_t experiment, std::vector<int64_t> have) {
   replay_request_t r{};
