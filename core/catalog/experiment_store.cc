@@ -1,5 +1,6 @@
 #include "core/catalog/experiment_store.h"
 
+#include <iterator>
 #include <stdexcept>
 
 namespace idrig {
@@ -185,16 +186,32 @@ std::vector<std::pair<int64_t, int64_t>> ExperimentStore::SamplesWithoutCommand(
   return gaps;
 }
 
-std::vector<int64_t> ExperimentStore::MissingBlocks(const std::string& rig_id,
-                                                    int64_t experiment_id) {
-  const std::set<int64_t> have = BlockSeqs(rig_id, experiment_id);
+namespace {
+int64_t BlocksExpected(ExperimentStore& store, const std::string& rig_id, int64_t experiment_id,
+                       const std::set<int64_t>& have) {
   StoredExperiment e;
-  int64_t total = have.empty() ? 0 : *have.rbegin() + 1;
-  if (FindExperiment(rig_id, experiment_id, &e) && e.ended) total = e.blocks_total;
+  if (store.FindExperiment(rig_id, experiment_id, &e) && e.ended) return e.blocks_total;
+  return have.empty() || *have.rbegin() < 0 ? 0 : *have.rbegin() + 1;
+}
+}  // namespace
+
+std::vector<int64_t> ExperimentStore::MissingBlocks(const std::string& rig_id,
+                                                    int64_t experiment_id, size_t max_listed) {
+  const std::set<int64_t> have = BlockSeqs(rig_id, experiment_id);
+  const int64_t total = BlocksExpected(*this, rig_id, experiment_id, have);
   std::vector<int64_t> missing;
-  for (int64_t k = 0; k < total; ++k)
+  // At most have.size() + max_listed steps, whatever the total claims.
+  for (int64_t k = 0; k < total && missing.size() < max_listed; ++k)
     if (!have.count(k)) missing.push_back(k);
   return missing;
+}
+
+int64_t ExperimentStore::MissingCount(const std::string& rig_id, int64_t experiment_id) {
+  const std::set<int64_t> have = BlockSeqs(rig_id, experiment_id);
+  const int64_t total = BlocksExpected(*this, rig_id, experiment_id, have);
+  if (total <= 0) return 0;
+  const auto stored = std::distance(have.lower_bound(0), have.lower_bound(total));
+  return total - static_cast<int64_t>(stored);
 }
 
 }  // namespace idrig

@@ -47,8 +47,13 @@ class ExperimentStore {
                                   const std::set<int64_t>& skip = {});
   std::set<int64_t> BlockSeqs(const std::string& rig_id, int64_t experiment_id);
   // Block seqs in [0, blocks_total) not stored (blocks_total from the rig's final status, or
-  // max seq + 1 while the experiment runs).
-  std::vector<int64_t> MissingBlocks(const std::string& rig_id, int64_t experiment_id);
+  // max seq + 1 while the experiment runs), the first max_listed of them: both totals come from
+  // unsigned messages, and a status claiming 2^62 blocks made the logger list them all
+  // (tests/fuzz/fuzz_worker_logger: out of memory).
+  std::vector<int64_t> MissingBlocks(const std::string& rig_id, int64_t experiment_id,
+                                     size_t max_listed = 4000);
+  // How many there are (all of them, counted without listing).
+  int64_t MissingCount(const std::string& rig_id, int64_t experiment_id);
   // Sample ranges [first, last] in [0, samples_total) that no stored actuator command covers
   // (commands the logger did not hear: it names them instead of calling the record complete).
   std::vector<std::pair<int64_t, int64_t>> SamplesWithoutCommand(const std::string& rig_id,

@@ -43,6 +43,9 @@ std::string Poly(const Eigen::VectorXd& p, const char* var) {
   return first ? "0" : s.str();
 }
 
+constexpr int kMaxLogSeriesTerms = 10000;
+constexpr int kMaxOeIterations = 1000;
+
 ArxOptions ParseOptions(const json& o, bool output_error) {
   CheckOptionKeys(o, {"order", "max_order", "input_delay", "decimation", "first_equation",
                       "max_equations", "epsilon", "oe_iterations", "oe_tolerance", "log_series_terms"},
@@ -62,6 +65,16 @@ ArxOptions ParseOptions(const json& o, bool output_error) {
   get_int("log_series_terms", &options.log_series_terms);
   options.oe_iterations = output_error ? 30 : 0;
   get_int("oe_iterations", &options.oe_iterations);
+  // Without a bound, one request held a worker for hours: log_series_terms = 2^31 - 1 matrix
+  // products (the automatic summation stops at 10 000 terms), or as many output-error fits.
+  if (options.log_series_terms > kMaxLogSeriesTerms)
+    throw std::invalid_argument("option 'log_series_terms' must be <= " +
+                                std::to_string(kMaxLogSeriesTerms) + " (got " +
+                                std::to_string(options.log_series_terms) + ")");
+  if (options.oe_iterations > kMaxOeIterations)
+    throw std::invalid_argument("option 'oe_iterations' must be <= " +
+                                std::to_string(kMaxOeIterations) + " (got " +
+                                std::to_string(options.oe_iterations) + ")");
   if (o.contains("oe_tolerance")) {
     if (!o["oe_tolerance"].is_number() || !(o["oe_tolerance"].get<double>() > 0.0))
       throw std::invalid_argument("option 'oe_tolerance' must be a positive number");

@@ -1,5 +1,7 @@
 #include "core/methods/registry.h"
 
+#include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 #include "core/io/csv.h"
@@ -37,6 +39,22 @@ const MethodInfo& FindMethod(const std::string& name) {
   throw std::invalid_argument("unknown method '" + name + "'; known methods: " + known);
 }
 
+void CheckRecordMagnitude(const IoRecord& record) {
+  auto check = [](const Eigen::MatrixXd& m, const char* kind) {
+    for (long c = 0; c < m.cols(); ++c)
+      for (long r = 0; r < m.rows(); ++r)
+        if (std::abs(m(r, c)) > kMaxRecordMagnitude) {
+          std::ostringstream s;
+          s << "record: |" << kind << "| = " << std::abs(m(r, c)) << " in column " << c
+            << " at sample " << r << "; the methods need |values| <= " << kMaxRecordMagnitude
+            << " (their sums of squares overflow): rescale the record";
+          throw std::invalid_argument(s.str());
+        }
+  };
+  check(record.u, "u");
+  check(record.y, "y");
+}
+
 namespace {
 MethodReport Finish(const MethodInfo& info, MethodReport report, double sample_time, double min_fit) {
   report.json["method"] = info.name;
@@ -56,6 +74,7 @@ MethodReport RunMethod(const std::string& name, const std::string& data_path,
   IoRecord record;
   if (info.needs_record) {
     record = ReadIoRecordCsv(data_path);
+    CheckRecordMagnitude(record);
     input.record = &record;
   }
   return Finish(info, info.run(input, method_options), info.needs_record ? record.sample_time : 0.0, min_fit);
@@ -67,6 +86,7 @@ MethodReport RunMethod(const std::string& name, const IoRecord& record,
   if (!info.needs_record)
     throw std::invalid_argument("method '" + name + "' reads its data from a file, not a time record");
   ValidateIoRecord(record);
+  CheckRecordMagnitude(record);
   nlohmann::json method_options = options;
   const double min_fit = TakeMinFitOption(&method_options);
   MethodInput input;

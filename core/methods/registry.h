@@ -48,6 +48,13 @@ MethodReport RunMethod(const std::string& name, const std::string& data_path,
 MethodReport RunMethod(const std::string& name, const IoRecord& record,
                        const nlohmann::json& options);
 
+// A record value beyond this (in u or y) is refused by RunMethod: the methods' sums of squares
+// and products of samples would overflow to Inf/NaN (tests/fuzz/fuzz_worker_logger found
+// |u| ~ 1e295 reaching Eigen's matrix logarithm with NaN entries). Physical units never come close.
+constexpr double kMaxRecordMagnitude = 1e100;
+// Throws std::invalid_argument naming the value, its column and sample, and the limit.
+void CheckRecordMagnitude(const IoRecord& record);
+
 // Option helpers shared by adapters: typed lookup with a default, and a check that every
 // given key is known (a misspelt option is an error, not silently ignored).
 void CheckOptionKeys(const nlohmann::json& options, const std::vector<std::string>& known,

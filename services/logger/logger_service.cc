@@ -3,6 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <idrig/actuator_command_t.hpp>
 #include <idrig/experiment_status_t.hpp>
@@ -58,12 +59,24 @@ LoggerConfig LoggerConfig::FromJson(const nlohmann::json& c) {
   return config;
 }
 
+struct LoggerService::Writer {
+  explicit Writer(const std::string& db_path) : store(db_path) {}
+  ExperimentStore store;
+  std::unique_ptr<lcm::LogFile> lcmlog;
+  std::chrono::steady_clock::time_point last_summary =
+      std::chrono::steady_clock::now() - std::chrono::seconds(10);
+};
+
 LoggerService::LoggerService(Transport& transport, LoggerConfig config)
     : transport_(transport),
       config_(std::move(config)),
       reporter_(transport, "logger", "logger-" + HostName()) {
   // Open once here so that a bad path fails at start, not in the writer thread.
-  { ExperimentStore check(config_.db_path); }
+  if (config_.writer_thread) {
+    ExperimentStore check(config_.db_path);
+  } else {
+    inline_writer_ = OpenWriter();
+  }
   auto subscribe = [this](ChannelKind channel, Kind kind) {
     transport_.Subscribe(
         AnyRigChannel(channel),
@@ -76,10 +89,11 @@ LoggerService::LoggerService(Transport& transport, LoggerConfig config)
   subscribe(ChannelKind::kCommand, Kind::kCommand);
   subscribe(ChannelKind::kExperimentStatus, Kind::kStatus);
   subscribe(ChannelKind::kReplayRequest, Kind::kReplayRequest);
-  writer_ = std::thread([this] { WriterLoop(); });
+  if (config_.writer_thread) writer_ = std::thread([this] { WriterLoop(); });
 }
 
 LoggerService::~LoggerService() {
+  if (!writer_.joinable()) return;
   {
     std::lock_guard<std::mutex> lock(mutex_);
     stop_ = true;
@@ -107,22 +121,81 @@ void LoggerService::Enqueue(Kind kind, const std::string& channel, const uint8_t
   wake_.notify_one();
 }
 
-void LoggerService::WriterLoop() {
-  ExperimentStore store(config_.db_path);
-  std::unique_ptr<lcm::LogFile> lcmlog;
+std::unique_ptr<LoggerService::Writer> LoggerService::OpenWriter() {
+  auto writer = std::make_unique<Writer>(config_.db_path);
   if (!config_.lcmlog_path.empty()) {
     // Appended, never truncated: a restart (systemd's Restart=always after a crash) keeps the
     // log of everything recorded before.
-    lcmlog = std::make_unique<lcm::LogFile>(config_.lcmlog_path, "a");
-    if (!lcmlog->good()) {
+    writer->lcmlog = std::make_unique<lcm::LogFile>(config_.lcmlog_path, "a");
+    if (!writer->lcmlog->good()) {
       ++transport_.counters().handler_errors;
       spdlog::error("cannot append to the .lcmlog '{}': not written", config_.lcmlog_path);
-      lcmlog.reset();
+      writer->lcmlog.reset();
     } else {
       spdlog::info("appending to the .lcmlog '{}'", config_.lcmlog_path);
     }
   }
-  auto last_summary = std::chrono::steady_clock::now() - std::chrono::seconds(10);
+  return writer;
+}
+
+void LoggerService::WriteBatch(Writer& writer, const std::deque<Item>& batch) {
+  if (batch.empty()) return;
+  ExperimentStore& store = writer.store;
+  try {
+    store.Begin();
+    std::vector<const Item*> replays;
+    for (const Item& item : batch) {
+      if (item.kind == Kind::kReplayRequest) {
+        replays.push_back(&item);
+        continue;
+      }
+      try {  // one message that cannot be stored must not lose the rest of the batch
+        Store(store, item);
+      } catch (const std::exception& e) {
+        ++transport_.counters().handler_errors;
+        spdlog::error("a message on {} was not stored: {}", item.channel, e.what());
+      }
+      if (writer.lcmlog) {
+        lcm::LogEvent event;
+        event.eventnum = 0;  // numbered by the log file
+        event.timestamp = item.recv_utime;
+        event.channel = item.channel;
+        event.datalen = static_cast<int32_t>(item.bytes.size());
+        event.data = const_cast<uint8_t*>(item.bytes.data());
+        writer.lcmlog->writeEvent(&event);
+      }
+    }
+    if (writer.lcmlog) fflush(writer.lcmlog->getFilePtr());
+    store.Commit();
+    // Replays after the commit: they see everything received before them.
+    for (const Item* item : replays) Replay(store, *item);
+  } catch (const std::exception& e) {
+    ++transport_.counters().handler_errors;
+    spdlog::error("the writer failed on a batch of {} message(s): {}", batch.size(), e.what());
+    try {
+      store.Commit();
+    } catch (...) {
+    }
+  }
+}
+
+void LoggerService::MaybeRecover(Writer& writer) {
+  const auto now = std::chrono::steady_clock::now();
+  if (now - writer.last_summary <
+      std::chrono::milliseconds(static_cast<int>(config_.recover_period_s * 1000)))
+    return;
+  writer.last_summary = now;
+  try {
+    RecoverLosses(writer.store);
+    UpdateSummary(writer.store);
+  } catch (const std::exception& e) {
+    ++transport_.counters().handler_errors;
+    spdlog::error("the loss recovery failed: {}", e.what());
+  }
+}
+
+void LoggerService::WriterLoop() {
+  std::unique_ptr<Writer> writer = OpenWriter();
   for (;;) {
     std::deque<Item> batch;
     {
@@ -133,55 +206,23 @@ void LoggerService::WriterLoop() {
       batch.swap(queue_);
       in_flight_ = batch.size();
     }
-    if (!batch.empty()) {
-      try {
-        store.Begin();
-        std::vector<const Item*> replays;
-        for (const Item& item : batch) {
-          if (item.kind == Kind::kReplayRequest) {
-            replays.push_back(&item);
-            continue;
-          }
-          Store(store, item);
-          if (lcmlog) {
-            lcm::LogEvent event;
-            event.eventnum = 0;  // numbered by the log file
-            event.timestamp = item.recv_utime;
-            event.channel = item.channel;
-            event.datalen = static_cast<int32_t>(item.bytes.size());
-            event.data = const_cast<uint8_t*>(item.bytes.data());
-            lcmlog->writeEvent(&event);
-          }
-        }
-        if (lcmlog) fflush(lcmlog->getFilePtr());
-        store.Commit();
-        // Replays after the commit: they see everything received before them.
-        for (const Item* item : replays) Replay(store, *item);
-      } catch (const std::exception&) {
-        ++transport_.counters().handler_errors;
-        try {
-          store.Commit();
-        } catch (...) {
-        }
-      }
-    }
+    WriteBatch(*writer, batch);
     {
       std::lock_guard<std::mutex> lock(mutex_);
       in_flight_ = 0;
     }
     drained_.notify_all();
-    const auto now = std::chrono::steady_clock::now();
-    if (now - last_summary >
-        std::chrono::milliseconds(static_cast<int>(config_.recover_period_s * 1000))) {
-      last_summary = now;
-      try {
-        RecoverLosses(store);
-        UpdateSummary(store);
-      } catch (...) {
-        ++transport_.counters().handler_errors;
-      }
-    }
+    MaybeRecover(*writer);
   }
+}
+
+void LoggerService::WriteQueued() {
+  std::deque<Item> batch;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    batch.swap(queue_);
+  }
+  WriteBatch(*inline_writer_, batch);
 }
 
 void LoggerService::Store(ExperimentStore& store, const Item& item) {
@@ -196,6 +237,7 @@ void LoggerService::Store(ExperimentStore& store, const Item& item) {
       Decode(data, size, &probe, &transport_.counters());
       return;
     }
+    if (!IsRigOfChannel(h.rig_id, item.channel)) return ++wrong_rig_, void();
     StoredBlock b;
     b.seq = h.seq;
     b.first_sample = h.first_sample;
@@ -210,6 +252,7 @@ void LoggerService::Store(ExperimentStore& store, const Item& item) {
   } else if (item.kind == Kind::kCommand) {
     actuator_command_t command;
     if (!Decode(data, size, &command, &transport_.counters())) return;
+    if (!IsRigOfChannel(command.rig_id, item.channel)) return ++wrong_rig_, void();
     StoredBlock b;
     b.seq = command.seq;
     b.first_sample = command.first_sample;
@@ -221,6 +264,14 @@ void LoggerService::Store(ExperimentStore& store, const Item& item) {
   } else if (item.kind == Kind::kStatus) {
     experiment_status_t status;
     if (!Decode(data, size, &status, &transport_.counters())) return;
+    if (!IsRigOfChannel(status.rig_id, item.channel)) return ++wrong_rig_, void();
+    // SQLite binds NaN as NULL: the insert failed, and with it the rest of the writer's batch
+    // (fuzz_worker_logger crash-bfd01bbe; the catalogue's crash-417cbf93).
+    if (!std::isfinite(status.sample_rate_hz) || status.sample_rate_hz < 0) {
+      spdlog::warn("experiment status of {} experiment {} dropped: sample rate {}", status.rig_id,
+                   status.experiment_id, status.sample_rate_hz);
+      return;
+    }
     StoredExperiment e;
     e.rig_id = status.rig_id;
     e.experiment_id = status.experiment_id;
@@ -244,6 +295,9 @@ void LoggerService::Store(ExperimentStore& store, const Item& item) {
 void LoggerService::Replay(ExperimentStore& store, const Item& item) {
   replay_request_t request;
   if (!Decode(item.bytes.data(), item.bytes.size(), &request, &transport_.counters())) return;
+  // The answer goes to Channel(request.rig_id), which throws on a rig id that is not the
+  // channel's (fuzz_worker_logger crash-b2725de8: the batch's replays were lost).
+  if (!IsRigOfChannel(request.rig_id, item.channel)) return ++wrong_rig_, void();
   ++replays_;
   const std::set<int64_t> have(request.have_seqs.begin(), request.have_seqs.end());
   const std::string replay_channel = Channel(request.rig_id, ChannelKind::kReplay);
@@ -265,8 +319,7 @@ void LoggerService::Replay(ExperimentStore& store, const Item& item) {
     done.blocks_total = e.blocks_total;
     done.samples_total = e.samples_total;
   }
-  done.missing_seqs = store.MissingBlocks(request.rig_id, request.experiment_id);
-  if (done.missing_seqs.size() > 4000) done.missing_seqs.resize(4000);
+  done.missing_seqs = store.MissingBlocks(request.rig_id, request.experiment_id, 4000);
   done.n_missing = static_cast<int32_t>(done.missing_seqs.size());
   done.complete = done.ended && done.n_missing == 0;
   done.n_sent = sent;
@@ -298,9 +351,8 @@ void LoggerService::UpdateSummary(ExperimentStore& store) {
   const size_t first = experiments.size() > 10 ? experiments.size() - 10 : 0;
   for (size_t i = first; i < experiments.size(); ++i) {
     const StoredExperiment& e = experiments[i];
-    const auto missing = store.MissingBlocks(e.rig_id, e.experiment_id);
-    std::vector<int64_t> shown(missing.begin(),
-                               missing.begin() + std::min<size_t>(missing.size(), 50));
+    const std::vector<int64_t> shown = store.MissingBlocks(e.rig_id, e.experiment_id, 50);
+    const int64_t missing_count = store.MissingCount(e.rig_id, e.experiment_id);
     // Commands the logger did not hear (it was down, or they were lost): named by sample range.
     // The measured u in the blocks is what the rig applied, so the record stays consistent.
     nlohmann::json without_command = nlohmann::json::array();
@@ -314,16 +366,17 @@ void LoggerService::UpdateSummary(ExperimentStore& store) {
                     {"commands", e.commands_stored},
                     {"ended", e.ended},
                     {"blocks_total", e.blocks_total},
-                    {"missing_count", missing.size()},
+                    {"missing_count", missing_count},
                     {"missing", shown},
                     {"samples_without_command", without_command},
-                    {"complete", e.ended && missing.empty()}});
+                    {"complete", e.ended && missing_count == 0}});
   }
   std::lock_guard<std::mutex> lock(summary_mutex_);
   summary_ = list;
 }
 
 void LoggerService::Flush() {
+  if (inline_writer_) return WriteQueued();
   std::unique_lock<std::mutex> lock(mutex_);
   drained_.wait(lock, [this] { return queue_.empty() && in_flight_ == 0; });
 }
@@ -341,6 +394,7 @@ nlohmann::json LoggerService::Details() {
   d["stored_commands"] = stored_commands_.load();
   d["duplicates"] = duplicates_.load();
   d["replays"] = replays_.load();
+  d["wrong_rig"] = wrong_rig_.load();  // messages naming another rig than their channel's
   d["recovery_requests"] = recovery_requests_.load();
   std::lock_guard<std::mutex> lock(summary_mutex_);
   d["experiments"] = summary_;
@@ -349,6 +403,10 @@ nlohmann::json LoggerService::Details() {
 
 void LoggerService::Poll(int timeout_ms) {
   transport_.Handle(timeout_ms);
+  if (inline_writer_) {  // what the writer thread does: store, then recover when due
+    WriteQueued();
+    MaybeRecover(*inline_writer_);
+  }
   if (reporter_.Due()) reporter_.Maybe("running", Details().dump(-1, ' ', false, nlohmann::json::error_handler_t::replace), true);
 }
 

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <condition_variable>
 #include <deque>
+#include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -37,6 +38,10 @@ struct LoggerConfig {
   double recover_period_s = 0.5;    // ask the rig again for lost blocks this often
   double recover_window_s = 60.0;   // ... for experiments ended less than this ago
   std::string lcmlog_path;          // also write every recorded message to this .lcmlog ("" = off)
+  // false: no writer thread; Poll() and Flush() store what is queued on the caller's thread,
+  // and Poll() then runs the loss recovery when due (tests and the fuzz target, whose runs must
+  // repeat). Not read from the config file.
+  bool writer_thread = true;
   static LoggerConfig FromJson(const nlohmann::json& config);
 };
 
@@ -45,7 +50,8 @@ class LoggerService {
   LoggerService(Transport& transport, LoggerConfig config);
   ~LoggerService();
   void Poll(int timeout_ms);
-  // Waits until the writer has stored everything queued so far (tests, benchmarks).
+  // Waits until the writer has stored everything queued so far (tests, benchmarks); without a
+  // writer thread, stores it here.
   void Flush();
   int64_t stored_blocks() const { return stored_blocks_; }
   nlohmann::json Details();
@@ -58,7 +64,12 @@ class LoggerService {
     std::string channel;
     std::vector<uint8_t> bytes;
   };
+  struct Writer;  // the writer's store and .lcmlog (logger_service.cc)
   void Enqueue(Kind kind, const std::string& channel, const uint8_t* data, size_t size);
+  std::unique_ptr<Writer> OpenWriter();
+  void WriteBatch(Writer& writer, const std::deque<Item>& batch);
+  void MaybeRecover(Writer& writer);
+  void WriteQueued();  // without a writer thread: stores everything queued, on this thread
   void WriterLoop();
   void Store(ExperimentStore& store, const Item& item);
   void Replay(ExperimentStore& store, const Item& item);
@@ -74,10 +85,12 @@ class LoggerService {
   bool stop_ = false;
   size_t in_flight_ = 0;
   std::atomic<int64_t> stored_blocks_{0}, stored_commands_{0}, duplicates_{0}, replays_{0};
+  std::atomic<int64_t> wrong_rig_{0};  // ignored: the message's rig is not its channel's
   std::atomic<size_t> peak_queue_{0};
   std::atomic<int64_t> recovery_requests_{0};
   std::mutex summary_mutex_;
   nlohmann::json summary_ = nlohmann::json::array();
+  std::unique_ptr<Writer> inline_writer_;  // writer_thread false
   std::thread writer_;
 };
 

@@ -368,6 +368,13 @@ void WorkerService::StartCompute() {
     lineage["experiment_state"] = state_name;
     lineage["rig_message"] = end->second.message;
   }
+  if (config_.compute_inline) {
+    job.result = Compute(job.request, std::move(record), config_.worker_id, job.attempt,
+                         config_.debug_delay_s, lineage);
+    job.phase = Phase::kPublishing;
+    job.last_publish_us = 0;
+    return;
+  }
   job.phase = Phase::kComputing;
   job.future = std::async(std::launch::async, Compute, job.request, std::move(record),
                           config_.worker_id, job.attempt, config_.debug_delay_s, lineage);

@@ -39,6 +39,10 @@ struct WorkerConfig {
   KeyRing keys;                  // service key (claims, results; grants, acks); operator optional
   std::string state_dir;         // replay marks ("" = memory only)
   double auth_window_s = 300;
+  // true: the method runs on the caller's thread when the job's record is complete (in the
+  // handler or Tick() that completes it) instead of a compute thread; tests and the fuzz target,
+  // whose runs must repeat. Not read from the config file.
+  bool compute_inline = false;
   // Keys as the fields, plus "operator_key_file", "service_key_file".
   static WorkerConfig FromJson(const nlohmann::json& config);
   // std::invalid_argument naming a missing key; the constructor calls it.

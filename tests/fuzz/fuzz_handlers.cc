@@ -21,7 +21,6 @@
 
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,21 +33,14 @@
 #include "services/catalog/catalog_service.h"
 #include "services/excite/excite_service.h"
 #include "services/rig_sim/rig_sim.h"
+#include "tests/fuzz/fuzz_bus.h"
 
 namespace {
 using namespace idrig;
+using namespace idrig::fuzz;
 
 const char* kRig = "sim1";
 const char* kWorker = "worker-fuzz";
-
-HmacKey MakeKey(uint8_t salt) {
-  HmacKey key(32);
-  for (size_t i = 0; i < key.size(); ++i) key[i] = static_cast<uint8_t>(i * 37 + salt * 101 + 11);
-  return key;
-}
-const HmacKey& CommandKey() { static const HmacKey k = MakeKey(1); return k; }
-const HmacKey& OperatorKey() { static const HmacKey k = MakeKey(2); return k; }
-const HmacKey& ServiceKey() { static const HmacKey k = MakeKey(3); return k; }
 
 struct Bus {
   std::unique_ptr<Transport> transport = MakeLcmTransport("memq://");
@@ -95,33 +87,13 @@ EnvelopeSigner& ServiceSigner() {
 }
 
 template <class T>
-std::vector<uint8_t> WithFingerprint(const uint8_t* payload, size_t size) {
-  std::vector<uint8_t> bytes(8 + size);
-  const uint64_t hash = static_cast<uint64_t>(T::getHash());
-  for (int i = 0; i < 8; ++i) bytes[i] = static_cast<uint8_t>(hash >> (56 - 8 * i));
-  std::copy(payload, payload + size, bytes.begin() + 8);
-  return bytes;
-}
-
-template <class T>
 void PublishSigned(Bus& bus, EnvelopeSigner& signer, ChannelKind kind, const uint8_t* payload,
                    size_t size) {
-  const std::string channel = Channel(kRig, kind);
-  const std::vector<uint8_t> sealed =
-      signer.SealBytes(channel, T::getTypeName(), WithFingerprint<T>(payload, size));
-  bus.transport->Publish(channel, sealed.data(), sealed.size());
+  fuzz::PublishSigned<T>(*bus.transport, signer, Channel(kRig, kind), payload, size);
 }
 
 void PublishCommand(Bus& bus, const uint8_t* payload, size_t size) {
-  std::vector<uint8_t> bytes = WithFingerprint<actuator_command_t>(payload, size);
-  actuator_command_t command;
-  if (Decode(bytes.data(), bytes.size(), &command, nullptr)) {  // sign it as excite would
-    command.key_id = 1;
-    SignCommand(&command, CommandKey());
-    bytes.resize(command.getEncodedSize());
-    command.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-  }
-  bus.transport->Publish(Channel(kRig, ChannelKind::kCommand), bytes.data(), bytes.size());
+  fuzz::PublishCommand(*bus.transport, Channel(kRig, ChannelKind::kCommand), payload, size);
 }
 
 void Dispatch(Bus& bus, uint8_t selector, const uint8_t* payload, size_t size) {
@@ -135,12 +107,10 @@ void Dispatch(Bus& bus, uint8_t selector, const uint8_t* payload, size_t size) {
     case 2:
       return PublishSigned<model_result_t>(bus, ServiceSigner(), ChannelKind::kResult, payload,
                                            size);
-    case 3: {  // unsigned by design (status is a snapshot anyone may read)
-      const auto bytes = WithFingerprint<experiment_status_t>(payload, size);
-      bus.transport->Publish(Channel(kRig, ChannelKind::kExperimentStatus), bytes.data(),
-                             bytes.size());
-      return;
-    }
+    case 3:  // unsigned by design (status is a snapshot anyone may read)
+      return PublishPlain<experiment_status_t>(*bus.transport,
+                                               Channel(kRig, ChannelKind::kExperimentStatus),
+                                               payload, size);
     case 4:
       return PublishSigned<experiment_request_t>(bus, OperatorSigner(),
                                                  ChannelKind::kExperimentRequest, payload, size);
@@ -161,11 +131,7 @@ void WriteSeeds(const std::string& dir);
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  spdlog::set_level(spdlog::level::err);  // a handler's exception is logged at error level
-  if (const char* dir = std::getenv("IDRIG_FUZZ_WRITE_SEEDS")) {
-    WriteSeeds(dir);
-    std::exit(0);
-  }
+  InitHandlerTarget(WriteSeeds);
   return 0;
 }
 
@@ -183,48 +149,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   Bus& bus = *shared;
   const int64_t errors_before = bus.transport->counters().handler_errors;
-  size_t pos = 0;
-  while (pos < size) {
-    const uint8_t selector = data[pos++];
-    size_t length = 0;
-    if (pos + 2 <= size) length = (size_t(data[pos]) << 8) | data[pos + 1];
-    pos = std::min(pos + 2, size);
-    length = std::min(length, size - pos);
-    Dispatch(bus, selector, data + pos, length);
-    pos += length;
+  ForEachMessage(data, size, [&](uint8_t selector, const uint8_t* payload, size_t length) {
+    Dispatch(bus, selector, payload, length);
     bus.Pump();
-  }
-  if (bus.transport->counters().handler_errors > errors_before) {
-    std::fprintf(stderr, "an exception escaped a handler (handler_errors %lld)\n",
-                 static_cast<long long>(bus.transport->counters().handler_errors.load()));
-    std::abort();
-  }
+  });
+  AbortOnHandlerErrors(*bus.transport, errors_before);
   return 0;
 }
 
 namespace {
-
-class SeedWriter {
- public:
-  template <class T>
-  SeedWriter& Add(uint8_t selector, const T& message) {
-    std::vector<uint8_t> bytes(message.getEncodedSize());
-    message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-    const size_t length = bytes.size() - 8;
-    out_.push_back(selector);
-    out_.push_back(static_cast<uint8_t>(length >> 8));
-    out_.push_back(static_cast<uint8_t>(length));
-    out_.insert(out_.end(), bytes.begin() + 8, bytes.end());
-    return *this;
-  }
-  void Save(const std::string& path) const {
-    std::ofstream(path, std::ios::binary)
-        .write(reinterpret_cast<const char*>(out_.data()), static_cast<std::streamsize>(out_.size()));
-  }
-
- private:
-  std::vector<uint8_t> out_;
-};
 
 experiment_status_t RigStatus(int64_t experiment, int32_t state) {
   experiment_status_t s{};
@@ -237,28 +170,6 @@ experiment_status_t RigStatus(int64_t experiment, int32_t state) {
   s.blocks_total = 8;
   s.message = state == experiment_status_t::STATE_INTERRUPTED ? "samples 300..399 missing" : "";
   return s;
-}
-
-identify_request_t Identify(int64_t request, int64_t experiment, const std::string& method,
-                            const std::string& options) {
-  identify_request_t r{};
-  r.request_id = request;
-  r.rig_id = kRig;
-  r.experiment_id = experiment;
-  r.method = method;
-  r.options_json = options;
-  r.requested_by = "fuzz";
-  return r;
-}
-
-identify_claim_t Claim(int64_t request) {
-  identify_claim_t c{};
-  c.request_id = request;
-  c.rig_id = kRig;
-  c.kind = identify_claim_t::KIND_CLAIM;
-  c.worker_id = kWorker;
-  c.attempt = 1;
-  return c;
 }
 
 model_result_t Result(int64_t request, int64_t experiment, const std::string& method, bool ok,
@@ -298,17 +209,12 @@ experiment_request_t Experiment(int64_t request, int64_t experiment, int32_t act
 }
 
 actuator_command_t Command(int64_t seq, int64_t experiment, int64_t first, int32_t flags, int n) {
-  actuator_command_t c{};
-  c.seq = seq;
-  c.key_id = 1;
-  c.rig_id = kRig;
-  c.experiment_id = experiment;
-  c.first_sample = first;
-  c.sample_rate_hz = 100;
-  c.flags = flags;
-  c.n_samples = n;
-  for (int i = 0; i < n; ++i) c.u.push_back(0.5 * ((i / 3) % 2 ? 1 : -1));
-  return c;
+  return SeedCommand(kRig, seq, experiment, first, flags, n,
+                     [](int i) { return 0.5 * ((i / 3) % 2 ? 1 : -1); });
+}
+
+identify_claim_t Claim(int64_t request) {
+  return SeedClaim(kRig, request, identify_claim_t::KIND_CLAIM, kWorker);
 }
 
 void WriteSeeds(const std::string& dir) {
@@ -322,21 +228,21 @@ void WriteSeeds(const std::string& dir) {
   SeedWriter()
       .Add(3, RigStatus(7, done))
       .Add(3, from_excite)
-      .Add(0, Identify(11, 7, "arx", "{}"))
+      .Add(0, SeedIdentify(kRig, 11, 7, "arx", "{}"))
       .Add(1, Claim(11))
       .Add(2, Result(11, 7, "arx", true, report))
       .Add(1, Claim(11))
       .Save(dir + "/catalog_job_stored");
   SeedWriter()
       .Add(3, RigStatus(7, done))
-      .Add(0, Identify(12, 7, "n4sid", R"({"order":2})"))
+      .Add(0, SeedIdentify(kRig, 12, 7, "n4sid", R"({"order":2})"))
       .Add(1, Claim(12))
       .Add(2, Result(12, 7, "n4sid", false, "{}"))
       .Save(dir + "/catalog_job_failed");
   SeedWriter()
       .Add(3, RigStatus(8, experiment_status_t::STATE_INTERRUPTED))
-      .Add(0, Identify(13, 8, "arx", "{}"))
-      .Add(0, Identify(14, 8, "arx", R"({"segment":"longest_complete"})"))
+      .Add(0, SeedIdentify(kRig, 13, 8, "arx", "{}"))
+      .Add(0, SeedIdentify(kRig, 14, 8, "arx", R"({"segment":"longest_complete"})"))
       .Add(1, Claim(14))
       .Save(dir + "/catalog_interrupted");
   const std::string gap =
@@ -344,12 +250,12 @@ void WriteSeeds(const std::string& dir) {
       R"(,"details":{"format":"idrig.gap/1","effects":[{"effect":"backlash","params":{"r":0.1}}]}})";
   SeedWriter()
       .Add(3, RigStatus(9, done))
-      .Add(0, Identify(15, 9, "gap-diagnose", "{}"))
+      .Add(0, SeedIdentify(kRig, 15, 9, "gap-diagnose", "{}"))
       .Add(1, Claim(15))
       .Add(2, Result(15, 9, "gap-diagnose", true, gap))
       .Save(dir + "/catalog_gap_report");
   SeedWriter()
-      .Add(0, Identify(16, 99, "nonsense", "[]"))
+      .Add(0, SeedIdentify(kRig, 16, 99, "nonsense", "[]"))
       .Add(2, Result(17, 7, "arx", true, report))
       .Save(dir + "/catalog_refusals");
   const int32_t start = experiment_request_t::ACTION_START, stop = experiment_request_t::ACTION_STOP;

@@ -1,5 +1,5 @@
-// Inputs found by tests/fuzz/fuzz_handlers, kept as regression tests: the services' classes over
-// memq://, fed the authenticated but hostile messages the fuzzer made.
+// Inputs found by tests/fuzz/fuzz_handlers and fuzz_worker_logger, kept as regression tests: the
+// services' classes over memq://, fed the authenticated but hostile messages the fuzzer made.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,12 +8,17 @@
 #include <idrig/experiment_status_t.hpp>
 #include <idrig/identify_claim_t.hpp>
 #include <idrig/identify_request_t.hpp>
+#include <idrig/measurement_block_t.hpp>
+#include <idrig/model_result_t.hpp>
+#include <idrig/replay_done_t.hpp>
+#include <idrig/replay_request_t.hpp>
 
 #include "core/transport/auth.h"
 #include "core/transport/channels.h"
 #include "core/transport/transport.h"
 #include "services/catalog/catalog_service.h"
 #include "services/excite/excite_service.h"
+#include "services/logger/logger_service.h"
 #include "services/worker/worker_service.h"
 
 namespace idrig {
@@ -169,6 +174,194 @@ TEST(HandlerRegression, ExciteSurvivesARequestThatIsNotUtf8) {
   EXPECT_FALSE(excite.busy());
   EXPECT_EQ(transport->counters().handler_errors, 0);
   EXPECT_NE(status.find("unknown signal kind"), std::string::npos);
+}
+
+
+// --- fuzz_worker_logger: the worker's and the logger's handlers ---
+
+measurement_block_t Block(const std::string& rig, int64_t experiment, int64_t seq, int n,
+                          double u_scale) {
+  measurement_block_t b{};
+  b.rig_id = rig;
+  b.experiment_id = experiment;
+  b.seq = seq;
+  b.first_sample = seq * n;
+  b.sample_time_s = 0.01;
+  b.n_samples = n;
+  b.n_inputs = b.n_outputs = 1;
+  for (int i = 0; i < n; ++i) {
+    b.u.push_back({((seq * n + i) % 3 ? 1.0 : -1.0) * u_scale});
+    b.y.push_back({0.1 * i});
+  }
+  return b;
+}
+
+experiment_status_t RigEnd(const std::string& rig, int64_t experiment, int64_t blocks,
+                           double rate = 100) {
+  experiment_status_t s{};
+  s.source = "rig";
+  s.rig_id = rig;
+  s.experiment_id = experiment;
+  s.state = experiment_status_t::STATE_DONE;
+  s.sample_rate_hz = rate;
+  s.blocks_total = blocks;
+  s.samples_total = blocks * 40;
+  s.samples_done = s.samples_total;
+  return s;
+}
+
+// crash-2db499b3: a granted job on blocks with u ~ 2e295. ARX's least-squares sums overflowed,
+// and Eigen's matrix logarithm read past its buffer on the NaN model (ASan: heap-buffer-overflow
+// in the worker). Now the job fails, and the result says why.
+TEST(HandlerRegression, WorkerFailsAJobOnARecordBeyondTheMagnitudeLimit) {
+  auto transport = MakeLcmTransport("memq://");
+  WorkerConfig config;
+  config.worker_id = "worker-1";
+  config.keys = Keys();
+  config.compute_inline = true;
+  WorkerService worker(*transport, config);
+  EnvelopeSigner catalog(kServiceRole, Key(3), "catalog-1");
+  EnvelopeVerifier results(Keys(), "", 300, "test");
+  std::vector<model_result_t> got;
+  transport->Subscribe(Channel("sim1", ChannelKind::kResult),
+                       [&](const std::string& c, const uint8_t* d, size_t n) {
+                         model_result_t r;
+                         if (results.Open(c, d, n, {kServiceRole}, &r, nullptr, nullptr))
+                           got.push_back(r);
+                       });
+  for (int seq = 0; seq < 4; ++seq)
+    transport->PublishMessage(Channel("sim1", ChannelKind::kMeasurement), Block("sim1", 7, seq, 40, 2e295));
+  transport->PublishMessage(Channel("sim1", ChannelKind::kExperimentStatus), RigEnd("sim1", 7, 4));
+  identify_request_t request{};
+  request.request_id = 11;
+  request.rig_id = "sim1";
+  request.experiment_id = 7;
+  request.method = "arx";
+  request.options_json = R"({"order":2})";
+  catalog.Publish(*transport, Channel("sim1", ChannelKind::kIdentifyRequest), request);
+  worker.Poll(0);  // hears the offer and claims it
+  identify_claim_t grant{};
+  grant.request_id = 11;
+  grant.rig_id = "sim1";
+  grant.kind = identify_claim_t::KIND_GRANT;
+  grant.worker_id = "worker-1";
+  grant.attempt = 1;
+  catalog.Publish(*transport, Channel("sim1", ChannelKind::kClaim), grant);
+  worker.Poll(0);  // the grant: the record is complete, the method runs here
+  worker.Poll(0);  // publishes the result
+  EXPECT_EQ(transport->counters().handler_errors, 0);
+  ASSERT_FALSE(got.empty());
+  EXPECT_FALSE(got.back().ok);
+  EXPECT_NE(got.back().message.find("|u| = 2e+295"), std::string::npos) << got.back().message;
+  EXPECT_NE(got.back().message.find("rescale the record"), std::string::npos) << got.back().message;
+}
+
+struct InlineLogger {
+  std::unique_ptr<Transport> transport = MakeLcmTransport("memq://");
+  std::unique_ptr<LoggerService> logger;
+  std::vector<replay_request_t> recoveries;
+  std::vector<replay_done_t> dones;
+  InlineLogger() {
+    LoggerConfig config;
+    config.db_path = ":memory:";
+    config.writer_thread = false;
+    config.recover_period_s = 0;
+    logger = std::make_unique<LoggerService>(*transport, config);
+    transport->Subscribe(Channel("sim1", ChannelKind::kRigReplayRequest),
+                         [&](const std::string&, const uint8_t* d, size_t n) {
+                           replay_request_t r;
+                           if (Decode(d, n, &r, nullptr)) recoveries.push_back(r);
+                         });
+    transport->Subscribe(Channel("sim1", ChannelKind::kReplayDone),
+                         [&](const std::string&, const uint8_t* d, size_t n) {
+                           replay_done_t r;
+                           if (Decode(d, n, &r, nullptr)) dones.push_back(r);
+                         });
+  }
+  template <class T>
+  void Send(ChannelKind kind, const T& message) {
+    transport->PublishMessage(Channel("sim1", kind), message);
+  }
+  void Poll() {
+    logger->Poll(0);
+    transport->Handle(0);
+  }
+};
+
+replay_request_t ReplayOf(const std::string& rig, int64_t experiment, int64_t id) {
+  replay_request_t r{};
+  r.replay_id = id;
+  r.requester = "worker-1";
+  r.rig_id = rig;
+  r.experiment_id = experiment;
+  return r;
+}
+
+// crash-b2725de8: an (unsigned) rig status on sim1's channel naming rig "sim\xff". The logger
+// stored the experiment under that rig, and its loss recovery threw on Channel("sim\xff") every
+// period (handler_errors; the experiments after it in the list were never recovered). A replay
+// request naming such a rig threw the same way and lost the batch's other replays. Now both are
+// ignored (counted as wrong_rig), and the real experiment's recovery and replays still run.
+TEST(HandlerRegression, LoggerIgnoresMessagesNamingAnUnusableRig) {
+  InlineLogger bus;
+  bus.Send(ChannelKind::kExperimentStatus, RigEnd("sim\xff", 7, 2));
+  bus.Send(ChannelKind::kMeasurement, Block("sim1", 8, 0, 40, 1.0));
+  bus.Send(ChannelKind::kExperimentStatus, RigEnd("sim1", 8, 2));  // block 1 lost
+  bus.Send(ChannelKind::kReplayRequest, ReplayOf("si`1", 8, 1));
+  bus.Send(ChannelKind::kReplayRequest, ReplayOf("sim1", 8, 2));
+  bus.transport->Handle(0);
+  bus.Poll();
+  EXPECT_EQ(bus.transport->counters().handler_errors, 0);
+  EXPECT_EQ(bus.logger->Details()["wrong_rig"], 2);
+  ASSERT_EQ(bus.recoveries.size(), 1u);
+  EXPECT_EQ(bus.recoveries[0].experiment_id, 8);
+  EXPECT_EQ(bus.recoveries[0].have_seqs, std::vector<int64_t>{0});
+  ASSERT_EQ(bus.dones.size(), 1u);
+  EXPECT_EQ(bus.dones[0].replay_id, 2);
+  EXPECT_EQ(bus.dones[0].missing_seqs, std::vector<int64_t>{1});
+}
+
+// crash-bfd01bbe: a rig status with sample_rate_hz NaN. SQLite bound NaN as NULL, the insert
+// failed, and with it the rest of the writer's batch: the blocks received after it were lost.
+// Now the status is dropped with a log line and the blocks are stored.
+TEST(HandlerRegression, LoggerDropsAStatusWithANonFiniteRateAndKeepsTheBatch) {
+  InlineLogger bus;
+  bus.Send(ChannelKind::kMeasurement, Block("sim1", 8, 0, 40, 1.0));
+  bus.Send(ChannelKind::kExperimentStatus, RigEnd("sim1", 8, 2, std::nan("")));
+  bus.Send(ChannelKind::kMeasurement, Block("sim1", 8, 1, 40, 1.0));
+  bus.transport->Handle(0);
+  bus.Poll();
+  EXPECT_EQ(bus.transport->counters().handler_errors, 0);
+  EXPECT_EQ(bus.logger->stored_blocks(), 2);
+  // The status was dropped (no experiment row: blocks alone do not make one); the next good one
+  // is stored.
+  EXPECT_TRUE(bus.logger->Details()["experiments"].empty());
+  bus.Send(ChannelKind::kExperimentStatus, RigEnd("sim1", 8, 2));
+  bus.transport->Handle(0);
+  bus.Poll();
+  const auto experiments = bus.logger->Details()["experiments"];
+  ASSERT_EQ(experiments.size(), 1u);
+  EXPECT_EQ(experiments[0]["blocks"], 2);
+  EXPECT_EQ(experiments[0]["complete"], true);
+}
+
+// oom-f7675171: a rig status claiming 2^62 blocks. The logger's summary listed every missing
+// seq (out of memory, or minutes in the writer thread). Now they are counted, and 50 listed.
+TEST(HandlerRegression, LoggerCountsAHugeBlockTotalWithoutListingIt) {
+  InlineLogger bus;
+  bus.Send(ChannelKind::kMeasurement, Block("sim1", 8, 0, 40, 1.0));
+  bus.Send(ChannelKind::kExperimentStatus, RigEnd("sim1", 8, int64_t{1} << 62));
+  bus.Send(ChannelKind::kReplayRequest, ReplayOf("sim1", 8, 3));
+  bus.transport->Handle(0);
+  bus.Poll();
+  EXPECT_EQ(bus.transport->counters().handler_errors, 0);
+  const auto experiments = bus.logger->Details()["experiments"];
+  ASSERT_EQ(experiments.size(), 1u);
+  EXPECT_EQ(experiments[0]["missing_count"].get<int64_t>(), (int64_t{1} << 62) - 1);
+  EXPECT_EQ(experiments[0]["missing"].size(), 50u);
+  ASSERT_EQ(bus.dones.size(), 1u);
+  EXPECT_EQ(bus.dones[0].n_missing, 4000);
+  EXPECT_FALSE(bus.dones[0].complete);
 }
 
 }  // namespace

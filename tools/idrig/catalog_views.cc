@@ -383,7 +383,7 @@ json ExperimentsJson(Catalog* catalog, const std::string& store_path) {
                {"blocks_total", e.blocks_total}, {"state", e.ended ? "ended" : "running"}};
       row["blocks_stored"] = e.blocks_stored;
       row["commands_stored"] = e.commands_stored;
-      row["missing_blocks"] = store.MissingBlocks(e.rig_id, e.experiment_id).size();
+      row["missing_blocks"] = store.MissingCount(e.rig_id, e.experiment_id);
       row["in_store"] = true;
     }
   }

@@ -112,6 +112,9 @@ SeriesLogarithm ContinuousFromDiscreteBySeries(const Eigen::MatrixXd& Phi,
                                                const Eigen::VectorXd& Gamma, double sample_time,
                                                int terms) {
   if (!(sample_time > 0.0)) throw std::invalid_argument("series logarithm: T must be positive");
+  // Eigen's matrix logarithm (the cross-check below) reads past its buffer on a NaN entry.
+  if (!Phi.allFinite() || !Gamma.allFinite())
+    throw std::invalid_argument("series logarithm: Phi or Gamma has a NaN or Inf entry");
   const int n = static_cast<int>(Phi.rows());
   const Eigen::MatrixXd E = Eigen::MatrixXd::Identity(n, n);
   SeriesLogarithm out;
@@ -121,7 +124,11 @@ SeriesLogarithm ContinuousFromDiscreteBySeries(const Eigen::MatrixXd& Phi,
   const Eigen::MatrixXd X2 = X * X;
   Eigen::MatrixXd power = X;  // X^{2k+1}
   Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(n, n);
-  const int max_terms = terms > 0 ? terms : 10000;
+  // Automatic (terms <= 0): to machine precision, at most 10 000 terms; a series that diverges
+  // (rho(X) >= 1, or not a number) is not summed: its terms grow, and 10 000 of them only
+  // overflowed (most of a worker's job on such a model, tests/fuzz/fuzz_worker_logger).
+  const bool divergent = !(out.spectral_radius_x < 1.0);
+  const int max_terms = terms > 0 ? terms : (divergent ? 1 : 10000);
   int k = 0;
   for (; k < max_terms; ++k) {
     const Eigen::MatrixXd term = power / (2.0 * k + 1.0);
@@ -141,10 +148,15 @@ SeriesLogarithm ContinuousFromDiscreteBySeries(const Eigen::MatrixXd& Phi,
                                 : std::numeric_limits<double>::infinity();
   // B* = (Φ − E)⁻¹ A* Γ, Eq. (1.16).
   out.B = (Phi - E).fullPivLu().solve(out.A * Gamma);
-  // Cross-check against Eigen's matrix logarithm (principal branch).
-  const Eigen::MatrixXd log_phi = Phi.log() / sample_time;
-  out.truncation_error = log_phi.allFinite() ? (out.A - log_phi).cwiseAbs().maxCoeff()
-                                             : std::numeric_limits<double>::infinity();
+  // Cross-check against Eigen's matrix logarithm (principal branch), where the series converged:
+  // rho(X) < 1 puts every eigenvalue of Phi in the open right half-plane, where the principal
+  // logarithm exists. On a singular Phi Eigen's square-root loop (matrix_log_compute_big) never
+  // ends (tests/fuzz/fuzz_worker_logger timeout-351249dd: a worker held by one request).
+  out.truncation_error = std::numeric_limits<double>::infinity();
+  if (out.converged) {
+    const Eigen::MatrixXd log_phi = Phi.log() / sample_time;
+    if (log_phi.allFinite()) out.truncation_error = (out.A - log_phi).cwiseAbs().maxCoeff();
+  }
   return out;
 }
 

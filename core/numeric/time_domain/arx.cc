@@ -340,6 +340,13 @@ ArxResult IdentifyArx(const IoRecord& record, const ArxOptions& options) {
   result.epsilon_rule = options.epsilon < 0.0 ? "gcv" : "user";
   result.condition_number = fit.solve.condition_number;
   result.g = fit.solve.g;
+  if (!result.g.allFinite()) {
+    std::ostringstream m;
+    m << "the least-squares solution is not finite (order " << order
+      << "): the record's sums of squares overflow (max |u| " << u.cwiseAbs().maxCoeff()
+      << ", max |y| " << y.cwiseAbs().maxCoeff() << "); rescale the record";
+    Fail(m.str());
+  }
   result.iterations = fit.iterations;
   const double dof = std::max(1.0, fit.plan.count - fit.solve.effective_parameters);
   result.noise_variance = fit.solve.rss / dof;

@@ -190,6 +190,8 @@ TEST(ExperimentStore, FindsGapsBySequenceNumber) {
   e.blocks_total = 10;
   store.UpdateExperiment(e);
   EXPECT_EQ(store.MissingBlocks("rig-a", 1), (std::vector<int64_t>{2, 5, 6, 8, 9}));
+  EXPECT_EQ(store.MissingCount("rig-a", 1), 5);
+  EXPECT_EQ(store.MissingBlocks("rig-a", 1, 2), (std::vector<int64_t>{2, 5}));
   EXPECT_EQ(store.Blocks("rig-a", 1, {0, 1}).size(), 3u);
 
   // Read-only (the dashboard): the same answers, and writes are refused by SQLite.
@@ -200,6 +202,35 @@ TEST(ExperimentStore, FindsGapsBySequenceNumber) {
   b.data = {1};
   EXPECT_THROW(reader.AddBlock("rig-a", 1, b), std::runtime_error);
   EXPECT_THROW(ExperimentStore(TempPath("no_such_store"), true), std::runtime_error);
+}
+
+// An (unsigned) final status claiming 2^62 blocks: counted, and only the first few listed (the
+// logger listed them all: out of memory, tests/fuzz/fuzz_worker_logger oom-f7675171).
+TEST(ExperimentStore, AHugeBlockTotalIsCountedNotListed) {
+  ExperimentStore store(":memory:");
+  for (int64_t seq : {0, 1, 3}) {
+    StoredBlock b;
+    b.seq = seq;
+    b.n_samples = 10;
+    b.data = {1};
+    store.AddBlock("rig-a", 1, b);
+  }
+  StoredExperiment e;
+  e.rig_id = "rig-a";
+  e.experiment_id = 1;
+  e.ended = true;
+  e.blocks_total = int64_t{1} << 62;
+  store.UpdateExperiment(e);
+  EXPECT_EQ(store.MissingCount("rig-a", 1), (int64_t{1} << 62) - 3);
+  EXPECT_EQ(store.MissingBlocks("rig-a", 1, 4), (std::vector<int64_t>{2, 4, 5, 6}));
+  EXPECT_EQ(store.MissingBlocks("rig-a", 1).size(), 4000u);
+  // A block seq far ahead while the experiment runs: the same.
+  StoredBlock far;
+  far.seq = int64_t{1} << 61;
+  far.data = {1};
+  store.AddBlock("rig-a", 2, far);
+  EXPECT_EQ(store.MissingCount("rig-a", 2), int64_t{1} << 61);
+  EXPECT_EQ(store.MissingBlocks("rig-a", 2, 3), (std::vector<int64_t>{0, 1, 2}));
 }
 
 }  // namespace
