@@ -4,6 +4,7 @@
 // signs it as the holder of the role's key would), the input's framing
 // [selector][length, 2 bytes big-endian][payload]..., and the seed files in that framing.
 #include <idrig/actuator_command_t.hpp>
+#include <idrig/experiment_status_t.hpp>
 #include <idrig/identify_claim_t.hpp>
 #include <idrig/identify_request_t.hpp>
 #include <spdlog/spdlog.h>
@@ -117,6 +118,22 @@ inline identify_request_t SeedIdentify(const std::string& rig, int64_t request, 
   r.options_json = options;
   r.requested_by = "fuzz";
   return r;
+}
+
+// A rig's experiment status for the seeds: `blocks` blocks, `samples` samples done of as many;
+// an interrupted one names `missing`.
+inline experiment_status_t SeedRigStatus(const std::string& rig, int64_t experiment, int32_t state,
+                                         int64_t blocks, int64_t samples, const std::string& missing) {
+  experiment_status_t s{};
+  s.source = "rig";
+  s.rig_id = rig;
+  s.experiment_id = experiment;
+  s.state = state;
+  s.sample_rate_hz = 100;
+  s.samples_done = s.samples_total = samples;
+  s.blocks_total = blocks;
+  s.message = state == experiment_status_t::STATE_INTERRUPTED ? missing : "";
+  return s;
 }
 
 inline identify_claim_t SeedClaim(const std::string& rig, int64_t request, int32_t kind,

@@ -160,16 +160,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 namespace {
 
 experiment_status_t RigStatus(int64_t experiment, int32_t state) {
-  experiment_status_t s{};
-  s.source = "rig";
-  s.rig_id = kRig;
-  s.experiment_id = experiment;
-  s.state = state;
-  s.sample_rate_hz = 100;
-  s.samples_done = s.samples_total = 800;
-  s.blocks_total = 8;
-  s.message = state == experiment_status_t::STATE_INTERRUPTED ? "samples 300..399 missing" : "";
-  return s;
+  return SeedRigStatus(kRig, experiment, state, 8, 800, "samples 300..399 missing");
 }
 
 model_result_t Result(int64_t request, int64_t experiment, const std::string& method, bool ok,

@@ -218,16 +218,7 @@ std::vector<measurement_block_t> Blocks(int64_t experiment, int blocks, int per_
 }
 
 experiment_status_t RigStatus(int64_t experiment, int32_t state, int64_t blocks, int64_t samples) {
-  experiment_status_t s{};
-  s.source = "rig";
-  s.rig_id = kRig;
-  s.experiment_id = experiment;
-  s.state = state;
-  s.sample_rate_hz = 100;
-  s.samples_done = s.samples_total = samples;
-  s.blocks_total = blocks;
-  s.message = state == experiment_status_t::STATE_INTERRUPTED ? "samples 10..19 missing" : "";
-  return s;
+  return SeedRigStatus(kRig, experiment, state, blocks, samples, "samples 10..19 missing");
 }
 
 result_ack_t Ack(int64_t request) {
