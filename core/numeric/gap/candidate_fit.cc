@@ -497,7 +497,7 @@ static void ReleaseUnreachedLimits(const FitContext& ctx, CandidateWork& w) {
   if (!(span > 0) || (!free_lo && !free_hi) || (free_lo && free_hi)) return;
   CandidateWork trial;
   FitSpec(ctx, w.spec, {w.x}, {{free_lo ? v_min - 2 * span : lo, free_hi ? v_max + 2 * span : hi}}, trial);
-  if (!(trial.fit.estimation_mse <= w.fit.estimation_mse * (1 + 2 * std::sqrt(2.0 / std::max<long>(1, n))))) return;
+  if (!(trial.fit.estimation_mse <= w.fit.estimation_mse * SampleVarianceTolerance(n))) return;
   trial.fit.evaluations += w.fit.evaluations;
   trial.fit.note = std::string(free_lo ? "lower" : "upper") + " limit not reached by the estimation records: none assumed";
   w = std::move(trial);

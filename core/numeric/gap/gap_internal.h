@@ -4,6 +4,8 @@
 // tests, validation BIC, signature, eligibility and weights), gap_report.cc (data checks, the
 // verdict and DiagnoseGap itself). Not a public interface.
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
 #include <functional>
 #include <limits>
 #include <string>
@@ -145,6 +147,9 @@ void SmoothedStaircase(Eigen::VectorXd& y, double q, double s);
 
 // Every sample within 2 % of the range from the minimum or the maximum.
 bool BinaryInput(const std::vector<GapRecord>& records);
+// 1 + two standard deviations of a χ²_n sample variance, σ²(1 + 2√(2/n))/σ²: how much larger an
+// MSE of n samples may come out than the variance it estimates and still be that variance.
+inline double SampleVarianceTolerance(long n) { return 1 + 2 * std::sqrt(2.0 / std::max<long>(1, n)); }
 
 double Correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 

@@ -469,7 +469,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   // validation records within the independent noise floor (its MSE within two standard
   // deviations of a χ²_N sample variance, σ²(1 + 2√(2/N))).
   const bool floor_known = floor.method != "best_candidate_residual";
-  const double floor_mse = floor.sigma * floor.sigma * (1 + 2 * std::sqrt(2.0 / n_val));
+  const double floor_mse = floor.sigma * floor.sigma * SampleVarianceTolerance(n_val);
   auto within_floor = [&](double mse) { return floor_known && mse <= floor_mse; };
   double verdict_val_mse = top.validation_mse;
   if (!unmodelled && v.effect != "ambiguous" && top.effect.kind != EffectKind::kNone &&

@@ -88,8 +88,9 @@ void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& wor
       }
   const bool one_sided = std::min(below, above) < 0.01 * total && std::max(below, above) >= 0.01 * total;
   const bool flat_holds_zero = std::abs(du) <= d;  // u = 0 inside u + du ∈ [−d, d]
-  const double tolerance = 1 + 2 * std::sqrt(2.0 / std::max<long>(1, ctx.n_val));
-  if (!one_sided || flat_holds_zero || !(limit->fit.validation_mse <= dead->fit.validation_mse * tolerance)) return;
+  if (!one_sided || flat_holds_zero ||
+      !(limit->fit.validation_mse <= dead->fit.validation_mse * SampleVarianceTolerance(ctx.n_val)))
+    return;
   char line[300];
   std::snprintf(line, sizeof line,
                 "one-sided over the records: only the kink at u = %.4g is reached, the flat part "
