@@ -154,6 +154,8 @@ nlohmann::json GapReportToJson(const GapReport& report) {
         {"lr_threshold", c.lr_threshold},
         {"significant", c.significant},
         {"signature", c.signature},
+        {"validation_gain_z", c.validation_gain_z},
+        {"nuisance_columns", {{"estimation", c.nuisance_estimation}, {"validation", c.nuisance_validation}}},
         {"estimation_mse", c.estimation_mse},
         {"validation_mse", c.validation_mse},
         {"parameters", c.parameters},

@@ -65,7 +65,7 @@ struct BenchSettings {
   int cases = 26, samples = 4000, jobs = 2;
   uint64_t seed = 1;
   double snr = 30, combos = 0;
-  bool json = false, offsets = false;
+  bool json = false, offsets = false, integrating = false;
   std::string dump, excitation;
 };
 
@@ -91,6 +91,7 @@ void RunBench(const BenchSettings& b) {
       options.samples = b.samples;
       options.excitation = b.excitation;
       options.offsets = b.offsets;
+      options.integrating = b.integrating;
       const GapCase c = MakeGapCase(truth, rng, options);
       if (!b.dump.empty()) WriteCase(c, b.dump, i);
       const auto start = std::chrono::steady_clock::now();
@@ -123,6 +124,7 @@ void RunBench(const BenchSettings& b) {
   if (b.json) {
     nlohmann::json out = {{"cases", b.cases}, {"seed", b.seed}, {"snr_db", b.snr}, {"samples", b.samples},
                           {"offsets", b.offsets}, {"combos", b.combos},
+                          {"integrating", b.integrating}, {"excitation", b.excitation},
                           {"single_cases", s.single_cases},
                           {"top1_accuracy", s.top1_accuracy}, {"false_alarm_rate", s.false_alarm_rate},
                           {"single_extra_effect", s.single_extra},
@@ -258,8 +260,10 @@ void RegisterGapCommand(CLI::App& app) {
   bench->add_option("--jobs", b->jobs, "parallel diagnoses")->check(CLI::Range(1, 64));
   bench->add_flag("--json", b->json, "print the summary as JSON");
   bench->add_option("--dump", b->dump, "also write each case (sim model, records, truth) to this directory");
-  bench->add_option("--excitation", b->excitation, "levels, prbs or rbs for every case (default: drawn per case)")
-      ->check(CLI::IsMember({"levels", "prbs", "rbs"}));
+  bench->add_option("--excitation", b->excitation, "levels, prbs, rbs, noise (band-limited Gaussian), steps (random staircase) or chirp for every case (default: one of the first three drawn per case)")
+      ->check(CLI::IsMember({"levels", "prbs", "rbs", "noise", "steps", "chirp"}));
+  bench->add_flag("--integrating", b->integrating,
+                  "integrating plants only (K/(s(Ts + 1)): position from force, a level from a flow)");
   bench->add_flag("--offsets", b->offsets,
                   "random actuator offset (up to ±30 % of the command's peak) and sensor offset "
                   "(10–100 % of the output range) on every case");

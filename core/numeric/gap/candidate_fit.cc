@@ -43,7 +43,8 @@ Eigen::MatrixXd FreeResponse(const TransferFunction& plant, double ts, long n) {
 // the small normal equations, equilibrated and solved by a symmetric eigen-decomposition with a
 // relative cut-off (a minimum-norm solution where the free response's columns are nearly
 // dependent: the fitted values, all that matters here, are then still the projection).
-Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixXd& free_rows) {
+Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixXd& free_rows,
+                                  long* rank = nullptr) {
   const long len = r.size(), rows = std::min<long>(len, free_rows.rows()), k = 1 + free_rows.cols();
   Eigen::MatrixXd gram(k, k);
   Eigen::VectorXd rhs(k);
@@ -64,8 +65,12 @@ Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixX
   const double cut = 1e-13 * lambda.cwiseAbs().maxCoeff();
   const Eigen::VectorXd proj = eig.eigenvectors().transpose() * (scale.asDiagonal() * rhs);
   Eigen::VectorXd z = Eigen::VectorXd::Zero(k);
+  if (rank) *rank = 0;
   for (long i = 0; i < k; ++i)
-    if (lambda(i) > cut) z += eig.eigenvectors().col(i) * (proj(i) / lambda(i));
+    if (lambda(i) > cut) {
+      z += eig.eigenvectors().col(i) * (proj(i) / lambda(i));
+      if (rank) ++*rank;
+    }
   return scale.asDiagonal() * z;
 }
 
@@ -135,7 +140,11 @@ Effect Candidate::EffectAt(const Eigen::VectorXd& x, size_t i) const {
   Effect e;
   e.kind = kind;
   switch (kind) {
-    case EffectKind::kTimeDelay: e.params = {Pos(phi(0)) * s.ts}; break;
+    case EffectKind::kTimeDelay:
+      // No longer than the longest record: a longer delay only delays the whole response out of
+      // it, and its delay line (one slot a sample) would not fit in memory near Pos's bound.
+      e.params = {std::min(Pos(phi(0)) * s.ts, s.duration)};
+      break;
     case EffectKind::kActuatorLag: e.params = {Pos(phi(0)) * s.ts}; break;
     case EffectKind::kUnmodelledResonance:
       e.params = {Pos(phi(0)) / s.ts, std::clamp(Pos(phi(1)), 1e-4, 10.0)};
@@ -300,6 +309,27 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
     }
   if (nuisance) nuisance->input_offset = InputOffset(x);
   return y;
+}
+
+long Candidate::NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapRecord>& records) const {
+  TransferFunction linear = Plant(x);
+  for (const Effect& e : Effects(x))
+    if (IsLinearEffect(e.kind)) linear = ApplyLinearEffect(linear, e);
+  long columns = 0;
+  for (const GapRecord& record : records) {
+    const long first = record.score_from, total = record.y.size() - first;
+    const long segments = spec_.segment > 0 ? std::max<long>(1, total / spec_.segment) : 1;
+    const long longest = (total + segments - 1) / segments;
+    const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(linear, record.sample_time, longest)
+                                                  : Eigen::MatrixXd(longest, 0);
+    for (long j = 0; j < segments; ++j) {
+      const long len = first + (j + 1) * total / segments - (first + j * total / segments);
+      long rank = 0;
+      OffsetAndStateFit(Eigen::VectorXd::Zero(len), free, &rank);
+      columns += rank;
+    }
+  }
+  return columns;
 }
 
 void Residuals::operator()(const Eigen::VectorXd& x, Eigen::VectorXd& r) const {

@@ -104,14 +104,19 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   for (CandidateWork& w : pairs) {
     CandidateFit& c = w.fit;
     if (c.effects.size() < 2) continue;
-    const int dof = std::max(1, c.parameters - one.parameters);
+    const Candidate cand(*ctx.g0, w.spec, ctx.scales, ctx.options->substeps);
+    if (cand.Size() == w.x.size()) {
+      c.nuisance_estimation = cand.NuisanceColumns(w.x, *ctx.estimation);
+      c.nuisance_validation = cand.NuisanceColumns(w.x, *ctx.validation);
+    }
+    const int dof = std::max(1, c.parameters - one.parameters +
+                                    static_cast<int>(std::max<long>(0, c.nuisance_estimation - one.nuisance_estimation)));
     c.likelihood_ratio = ctx.n_est * std::log(one.estimation_mse / std::max(c.estimation_mse, 1e-300));
     c.lr_threshold = ChiSquareQuantile(1 - options.significance / ctx.k_effects, dof);
     c.significant = c.likelihood_ratio > c.lr_threshold;
     c.validation_mse = (ctx.y_val - w.y_val).squaredNorm() / ctx.n_val;
     c.nrmse_after = Nrmse(ctx.y_val, w.y_val)(0);
-    c.bic = ctx.n_val * std::log(std::max(c.validation_mse, 1e-300)) +
-            c.parameters * std::log(double(ctx.n_est));
+    c.bic = ValidationBic(ctx.n_val, ctx.n_est, c.validation_mse, c.parameters, c.nuisance_validation);
     c.signature = Correlation(w.y_val - first.y_val, ctx.y_val - first.y_val);
   }
   MaskOneSidedDeadZone(ctx, pairs, 1);  // a one-sided second limit is a limit (ranking.cc)

@@ -276,6 +276,11 @@ EffectSimulator::EffectSimulator(const TransferFunction& plant, const std::vecto
     if (IsLinearEffect(e.kind)) linear = ApplyLinearEffect(linear, e);
     if (IsFeedbackEffect(e.kind)) feedback_ = true;
   }
+  // The delay line holds one slot per sample: a delay of more than 10^8 samples (11 days at
+  // 100 Hz) is no record's, and would not fit in memory.
+  if (!(linear.delay_s / sample_time <= 1e8))
+    Fail("effect simulation: a delay of " + std::to_string(linear.delay_s) + " s is " +
+         std::to_string(linear.delay_s / sample_time) + " samples, more than 10^8");
   if (feedback_) {
     // Friction and cubic stiffness act in feedback: the force depends on the plant's own state.
     // Continuous realisation with two inputs, u (through the drive) and the force w (into the

@@ -17,7 +17,19 @@ double Gaussian(std::mt19937_64& rng) { return std::normal_distribution<double>(
 
 // Random stable plant: first order, a mass–spring–damper, or the two in series. Position-like
 // output (second order at least) for friction and cubic stiffness.
-TransferFunction RandomPlant(EffectKind truth, std::mt19937_64& rng, double* bandwidth) {
+TransferFunction RandomPlant(EffectKind truth, std::mt19937_64& rng, double* bandwidth,
+                             bool integrating = false) {
+  if (integrating) {
+    // Position from force (a damped mass, K/(s(s + c))) or a level from a flow through a pump
+    // lag: both K/(s(Ts + 1)) with one integrator; "bandwidth" is the lag's corner.
+    const double corner = Uniform(rng, 2.0, 10.0);
+    const double gain = Uniform(rng, 0.5, 2.0);
+    TransferFunction tf;
+    tf.num = Eigen::VectorXd::Constant(1, gain * corner);
+    tf.den = Eigen::Vector3d(1.0, corner, 0.0);
+    *bandwidth = corner;
+    return tf;
+  }
   const double gain = Uniform(rng, 0.5, 2.0);
   const double omega = Uniform(rng, 2.0, 15.0);
   const double zeta = Uniform(rng, 0.15, 0.8);
@@ -69,6 +81,50 @@ Eigen::VectorXd Excitation(const std::string& kind, double bandwidth, double amp
       const Eigen::VectorXd part = GenerateExcitation(spec, fs, segment - step);
       u.segment(s * segment, step).setConstant((s % 2 ? -0.6 : 0.6) * amplitude * levels[s]);
       u.segment(s * segment + step, segment - step) = part;
+    }
+    return u;
+  }
+  if (kind == "noise") {
+    // Band-limited Gaussian noise: white noise through two first-order low-passes at f_band,
+    // scaled so that the peak is about `amplitude` (standard deviation amplitude/3). Not periodic:
+    // the noise floor comes from the ARX predictor, no detection lines.
+    std::mt19937_64 g(seed);
+    const double a = 1 - std::exp(-2 * M_PI * f_band * options.sample_time);
+    Eigen::VectorXd u(n);
+    double s1 = 0, s2 = 0;
+    for (long k = -200; k < n; ++k) {  // run in so the record does not start from zero
+      s1 += a * (Gaussian(g) - s1);
+      s2 += a * (s1 - s2);
+      if (k >= 0) u(k) = s2;
+    }
+    const double sd = std::sqrt((u.array() - u.mean()).square().mean());
+    return (u.array() - u.mean()) * (amplitude / 3 / std::max(sd, 1e-12));
+  }
+  if (kind == "steps") {
+    // A random staircase: levels uniform in ±amplitude held for 0.5–3 of the plant's slow time
+    // constants each (what a rig engineer's manual test looks like).
+    std::mt19937_64 g(seed);
+    Eigen::VectorXd u(n);
+    long k = 0;
+    while (k < n) {
+      const double level = Uniform(g, -amplitude, amplitude);
+      const long hold = std::max<long>(5, std::lround(Uniform(g, 0.5, 3.0) / bandwidth / options.sample_time));
+      for (long j = 0; j < hold && k < n; ++j, ++k) u(k) = level;
+    }
+    return u;
+  }
+  if (kind == "chirp") {
+    // One logarithmic sweep over the record from f_band/30 to f_band at a constant amplitude,
+    // its start and direction drawn from the seed.
+    std::mt19937_64 g(seed);
+    const double f0 = f_band / 30, f1 = f_band, T = n * options.sample_time;
+    const double phase0 = Uniform(g, 0, 2 * M_PI);
+    const bool up = Uniform(g, 0, 1) < 0.5;
+    Eigen::VectorXd u(n);
+    const double r = std::log(f1 / f0);
+    for (long k = 0; k < n; ++k) {
+      const double t = (up ? k : n - 1 - k) * options.sample_time;
+      u(k) = amplitude * std::sin(phase0 + 2 * M_PI * f0 * T / r * (std::exp(r * t / T) - 1));
     }
     return u;
   }
@@ -266,14 +322,15 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
   c.truths = truths;
   const EffectKind shape_of = truths.size() == 2 && IsFeedbackEffect(truths[1]) ? truths[1] : truths[0];
   double bandwidth = 1;
-  c.sim = RandomPlant(shape_of, rng, &bandwidth);
+  c.sim = RandomPlant(shape_of, rng, &bandwidth, options.integrating);
   c.real = c.sim;
   const char* kinds[3] = {"levels", "prbs", "rbs"};
   c.excitation = kinds[static_cast<int>(Uniform(rng, 0, 3)) % 3];
   if (!options.excitation.empty()) {
-    if (options.excitation != "levels" && options.excitation != "prbs" && options.excitation != "rbs")
+    static const char* known[] = {"levels", "prbs", "rbs", "noise", "steps", "chirp"};
+    if (std::find(std::begin(known), std::end(known), options.excitation) == std::end(known))
       throw std::invalid_argument("gap case: excitation '" + options.excitation +
-                                  "' is not one of levels, prbs, rbs");
+                                  "' is not one of levels, prbs, rbs, noise, steps, chirp");
     c.excitation = options.excitation;
   }
   const double amplitude = Uniform(rng, 0.5, 2.0);

@@ -22,12 +22,18 @@ struct GapCaseOptions {
   double snr_db = 30.0;        // output SNR (signal RMS / noise RMS in dB)
   int samples = 4000;          // per record
   double sample_time = 0.01;   // [s]
-  std::string excitation;      // "levels", "prbs", "rbs"; empty: drawn at random per case
+  // "levels", "prbs", "rbs"; or, only when asked for, "noise" (band-limited Gaussian), "steps"
+  // (a random staircase) or "chirp" (one logarithmic sweep); empty: one of the first three
+  // drawn at random per case.
+  std::string excitation;
   // Random operating point: an actuator offset (added to the command before every input-side
   // effect) of up to ±30 % of the command's peak, and a sensor offset (added to the reading)
   // of 10–100 % of the output's range, either sign; the records start with the rig settled at
   // the operating point (a warm-up at zero command is simulated and dropped).
   bool offsets = false;
+  // Integrating plants only (K/(s(Ts + 1)): position from force, a level from a flow). The
+  // records then drift with any actuator offset, as on such a rig run open loop.
+  bool integrating = false;
 };
 
 struct GapCase {

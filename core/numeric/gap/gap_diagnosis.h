@@ -41,7 +41,12 @@ struct GapRecord {
 struct GapOptions {
   double significance = 0.01;    // family-wise level of the likelihood-ratio tests
   double ambiguity_bic = 2.0;    // top two closer than this in BIC → "ambiguous"
-  double min_signature = 0.2;    // correlation of the effect's change with the measured gap
+  // The effect's change must correlate with the measured gap (signature ≥ min_signature: it
+  // explains a visible share of what the refit leaves), or, where the gap is small against the
+  // noise and no effect can explain such a share, its validation gain must be significant
+  // (validation_gain_z above the normal quantile at `significance`: a confirmation, on records
+  // it was not fitted to, of an LR test already passed at the Bonferroni-corrected level).
+  double min_signature = 0.2;
   int substeps = 4;              // sub-steps for friction and cubic stiffness
   int evaluations_per_start = 10;   // LM budget per start, ×(parameters + 1)
   int evaluations_polish = 80;      // LM budget for the best start, ×(parameters + 1)
@@ -94,6 +99,10 @@ struct CandidateFit {
   Effect effect;                 // fitted effect parameters
   TransferFunction plant;        // G0 after its coefficients were allowed to move
   int parameters = 0;            // fitted parameters (plant + effect)
+  // Output offsets and free initial states fitted by projection (per record and segment), on
+  // the estimation and on the validation records; counted in the LR's degrees of freedom
+  // (beyond the refit's) and in the validation BIC (see ValidationBic).
+  long nuisance_estimation = 0, nuisance_validation = 0;
   double estimation_mse = 0;
   double validation_mse = 0;
   double nrmse_after = 0;        // validation simulation NRMSE
@@ -103,6 +112,10 @@ struct CandidateFit {
   double lr_threshold = 0;
   bool significant = false;
   double signature = 0;          // corr(ŷ_c − ŷ_0, y − ŷ_0) on validation data
+  // The validation gain as a z statistic: mean(e_ref² − e_c²)/its standard error (Newey–West),
+  // e_ref the refitted G0's validation residual. Stands in for the signature share when the gap
+  // is small against the noise (see GapOptions::min_signature).
+  double validation_gain_z = 0;
   bool eligible = false;         // may be the verdict
   std::vector<double> param_std; // 1σ of effect parameters (linearised), NaN when unknown
   std::vector<Effect> effects;   // every effect of the candidate (one, or two after selection)
@@ -141,6 +154,7 @@ struct GapVerdict {
   Effect params;
   std::vector<double> param_std;
   TransferFunction plant;        // the adjusted linear part
+  long nuisance_validation = 0;  // nuisance columns the verdict's model fits on validation
   std::vector<Effect> effects;   // one or two effects (the first is `params`); empty for none
   std::vector<std::vector<double>> effects_std;
   GapNuisance nuisance;

@@ -23,6 +23,7 @@ double Quantile(std::vector<double> v, double p);
 
 struct Scales {
   double ts = 1, slow = 1, u_max = 1, y_max = 1;
+  double duration = 1;  // [s] the longest record (estimation or validation): a bound on delays
   double lag_of_best_match = 0;  // [s] shift of G0's output that best matches y (cross-correlation)
   double u_quantile[5] = {0, 0, 0, 0, 0};  // 2, 15, 50, 85, 98 %
   double y_quantile[4] = {0, 0, 0, 0};     // 0.5, 2, 98, 99.5 %
@@ -88,6 +89,11 @@ class Candidate {
   // Simulate + the output offset and free initial state(s) fitted by least squares.
   Eigen::VectorXd Predict(const Eigen::VectorXd& x, const GapRecord& record,
                           Nuisance* nuisance = nullptr) const;
+  // How many nuisance columns Predict fits on these records: per record and segment the rank of
+  // [1, F] (output offset and free initial state). They are fitted on validation records too,
+  // so a candidate with more states (a lag, a resonance, a higher order), above all under
+  // multiple shooting, gets a lower validation MSE for free; the scores count them.
+  long NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapRecord>& records) const;
 
  private:
   TransferFunction base_;
@@ -152,6 +158,17 @@ bool BinaryInput(const std::vector<GapRecord>& records);
 inline double SampleVarianceTolerance(long n) { return 1 + 2 * std::sqrt(2.0 / std::max<long>(1, n)); }
 
 double Correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
+// Validation BIC with the nuisance fitted on the validation records counted: N_val ln V̂ +
+// k ln N_est, V̂ = mse·N_val/(N_val − nuisance_val) the unbiased residual variance.
+double ValidationBic(long n_val, long n_est, double mse, int parameters, long nuisance_val);
+// How significantly y_c simulates y better than y_ref (Diebold–Mariano): d_k = (y − y_ref)² −
+// (y − y_c)², z = (mean(d) − bias)/se with the Newey–West (Bartlett, lag 4(N/100)^(2/9))
+// standard error; 0 when d is identically zero. `bias`: the gain y_c gets for free from the
+// extra nuisance columns it fits on these records (their count times σ²/N).
+double ValidationGainZ(const Eigen::VectorXd& y, const Eigen::VectorXd& y_ref, const Eigen::VectorXd& y_c,
+                       double bias = 0.0);
+// One-sided normal quantile at level `alpha` (z with P(Z > z) = alpha).
+double NormalUpperQuantile(double alpha);
 
 // Simulation over the scored samples of every record, concatenated.
 Eigen::VectorXd Stack(const std::vector<GapRecord>& records,
@@ -164,6 +181,7 @@ struct CandidateWork {
   Eigen::VectorXd x;             // fitted parameter vector
   CandidateSpec spec;            // what was fitted
   bool masked = false;           // not eligible: the same map as a better-named candidate (note says)
+  bool gain_significant = false; // validation_gain_z above the normal quantile at `significance`
 };
 
 // Everything the candidates share: the data, the scales, G0 and its refit.
@@ -180,6 +198,7 @@ struct FitContext {
   CandidateSpec nuisance;                       // the nuisance setting every candidate shares
   bool integrating = false;                     // G0 integrates: du in every candidate
   int refit_size = 0;
+  long refit_nuisance_est = 0, refit_nuisance_val = 0;  // the refit's nuisance columns (Candidate::NuisanceColumns)
   int as_is_size = 0;                           // fitted parameters of `none` (du when integrating)
   double q_step = 0, q_strength = 0, q_phase = 0;  // the output lattice: q_phase + k·q_step
   int k_effects = 1;                            // effects tested (Bonferroni)
@@ -247,6 +266,7 @@ struct LinearOrderCheck {
   TransferFunction plant;
   int order = 0;
   double nrmse = 0;             // its validation NRMSE
+  long nuisance_validation = 0; // nuisance columns it fits on the validation records
 };
 LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top, GapReport& report);
 // The diagnosis again on check.plant; the verdict becomes unmodelled_dynamics with the static

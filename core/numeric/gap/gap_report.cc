@@ -166,6 +166,7 @@ void gap_detail::AdoptCandidate(const CandidateFit& c, GapVerdict& v) {
   v.param_std = c.effects_std.empty() ? c.param_std : c.effects_std.front();
   v.plant = c.plant;
   v.nrmse_after = c.nrmse_after;
+  v.nuisance_validation = c.nuisance_validation;
   v.nuisance.input_offset = c.input_offset;
   v.nuisance.input_offset_std = c.input_offset_std;
   v.nuisance.input_offset_fitted = c.input_offset_fitted;
@@ -275,6 +276,8 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     duration = std::max(duration, r.u.size() * ts);
   }
   scales.slow = SlowTimeConstant(g0, ts, duration);
+  scales.duration = duration;
+  for (const auto& r : validation) scales.duration = std::max(scales.duration, r.u.size() * ts);
   scales.u_max = std::max(1e-12, std::max(std::abs(*std::max_element(all_u.begin(), all_u.end())),
                                           std::abs(*std::min_element(all_u.begin(), all_u.end()))));
   scales.y_max = std::max(1e-12, std::max(std::abs(*std::max_element(all_y.begin(), all_y.end())),
@@ -377,6 +380,8 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   ctx.as_is_size = as_is.Size();
   ctx.refit_fit = refit_fit;
   ctx.refit_size = refit.Size();
+  ctx.refit_nuisance_est = refit.NuisanceColumns(refit_fit.x, estimation);
+  ctx.refit_nuisance_val = refit.NuisanceColumns(refit_fit.x, validation);
   ctx.q_step = QuantisationStep(estimation, &ctx.q_strength);
   ctx.q_phase = DetectOutputLattice(estimation, ctx.q_step, 0.0).offset;  // a sensor offset after the rounding
   ctx.k_effects = std::max<int>(1, static_cast<int>(kinds.size()) - 2);

@@ -43,7 +43,7 @@ double VerdictBic(const FitContext& ctx, const GapVerdict& v, int first_paramete
         second.kind == EffectKind::kSensorNonlinearity && second.params.size() > 3 && second.params[3] != 0;
     k += Candidate::NumEffectParams(second.kind, absolute ? std::vector<double>{1.0} : std::vector<double>{});
   }
-  return ctx.n_val * std::log(std::max(mse, 1e-300)) + k * std::log(double(ctx.n_est));
+  return ValidationBic(ctx.n_val, ctx.n_est, mse, k, v.nuisance_validation);
 }
 
 }  // namespace
@@ -120,12 +120,13 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
   const FitOutcome& f = best;
 
   const Eigen::VectorXd y_hat = Stack(*ctx.validation, [&](const GapRecord& r) { return cand.Predict(f.x, r); });
-  const int dof = std::max(1, cand.Size() - ctx.refit_size);
+  const long extra_nuisance = std::max<long>(0, cand.NuisanceColumns(f.x, *ctx.estimation) - ctx.refit_nuisance_est);
+  const int dof = std::max(1, cand.Size() - ctx.refit_size + static_cast<int>(extra_nuisance));
   const double lr = ctx.n_est * std::log(ctx.refit_fit.mse / std::max(f.mse, 1e-300));
   const double threshold = ChiSquareQuantile(1 - options.significance / ctx.k_effects, dof);
   const double validation_mse = (ctx.y_val - y_hat).squaredNorm() / ctx.n_val;
-  const double bic = ctx.n_val * std::log(std::max(validation_mse, 1e-300)) +
-                     cand.Size() * std::log(double(ctx.n_est));
+  const double bic = ValidationBic(ctx.n_val, ctx.n_est, validation_mse, cand.Size(),
+                                   cand.NuisanceColumns(f.x, *ctx.validation));
   const double signature = Correlation(y_hat - ctx.y_refit_val, ctx.y_val - ctx.y_refit_val);
   const double nrmse = Nrmse(ctx.y_val, y_hat)(0);
   char line[400];
@@ -151,6 +152,7 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
   check.beats_linear = bic < linear_bic - options.ambiguity_bic;
   check.linear_delta_bic = bic - linear_bic;
   check.plant = cand.Plant(f.x);
+  check.nuisance_validation = cand.NuisanceColumns(f.x, *ctx.validation);
   check.order = order;
   check.nrmse = nrmse;
   return check;
@@ -196,6 +198,7 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
   v.effects_std.clear();
   v.plant = check.plant;
   v.nrmse_after = check.nrmse;
+  v.nuisance_validation = check.nuisance_validation;
   v.linear_order = check.order;
   v.linear_nrmse_after = check.nrmse;
   if (found) {
@@ -206,6 +209,7 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
     v.plant = a.plant;
     v.nrmse_after = a.nrmse_after;
     v.nuisance = a.nuisance;
+    v.nuisance_validation = a.nuisance_validation;
   }
   if (!after.ranking.empty())
     report.notes.push_back("after the linear part is fixed (order " + std::to_string(check.order) + "): " +

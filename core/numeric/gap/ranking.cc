@@ -26,6 +26,28 @@ double Correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return d > 0 ? ac.dot(bc) / d : 0.0;
 }
 
+double ValidationGainZ(const Eigen::VectorXd& y, const Eigen::VectorXd& y_ref, const Eigen::VectorXd& y_c,
+                       double bias) {
+  const Eigen::ArrayXd d = (y - y_ref).array().square() - (y - y_c).array().square();
+  const long n = d.size();
+  if (n < 2) return 0.0;
+  const double mean = d.mean();
+  const Eigen::ArrayXd dc = d - mean;
+  const long lag = std::min<long>(n - 1, static_cast<long>(std::floor(4 * std::pow(n / 100.0, 2.0 / 9.0))));
+  double var = dc.square().mean();
+  for (long l = 1; l <= lag; ++l)
+    var += 2 * (1 - double(l) / (lag + 1)) * (dc.head(n - l) * dc.tail(n - l)).sum() / n;
+  if (!(var > 0)) return 0.0;
+  return (mean - bias) / std::sqrt(var / n);
+}
+
+double NormalUpperQuantile(double alpha) { return std::sqrt(ChiSquareQuantile(1 - 2 * alpha, 1)); }
+
+double ValidationBic(long n_val, long n_est, double mse, int parameters, long nuisance_val) {
+  const double unbiased = mse * double(n_val) / double(std::max<long>(1, n_val - nuisance_val));
+  return n_val * std::log(std::max(unbiased, 1e-300)) + parameters * std::log(double(n_est));
+}
+
 void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
   CandidateFit& c = w.fit;
   const EffectKind kind = c.effect.kind;
@@ -36,13 +58,24 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
   const Eigen::VectorXd& y0_val = ctx.y0_val;
   const Eigen::VectorXd& y_refit_val = ctx.y_refit_val;
   const int k_effects = ctx.k_effects;
+  if (w.x.size() > 0) {
+    const Candidate cand(*ctx.g0, w.spec, ctx.scales, options.substeps);
+    if (cand.Size() == w.x.size()) {
+      c.nuisance_estimation = cand.NuisanceColumns(w.x, *ctx.estimation);
+      c.nuisance_validation = cand.NuisanceColumns(w.x, *ctx.validation);
+    }
+  }
   // Likelihood ratio on the estimation records (Wilks): the effect against the refitted G0,
-  // the refitted G0 against G0, each at the Bonferroni-corrected level.
+  // the refitted G0 against G0, each at the Bonferroni-corrected level; the nuisance columns an
+  // effect adds (a lag's or a resonance's states, per segment) count as parameters.
   if (kind != EffectKind::kNone) {
     const double reference = kind == EffectKind::kParameterMismatch ? as_is_mse : ctx.refit_fit.mse;
+    const long extra = kind == EffectKind::kParameterMismatch
+                           ? 0
+                           : std::max<long>(0, c.nuisance_estimation - ctx.refit_nuisance_est);
     const int dof = kind == EffectKind::kParameterMismatch
                         ? std::max(1, c.parameters - ctx.as_is_size)
-                        : std::max(1, c.parameters - ctx.refit_size);
+                        : std::max(1, c.parameters - ctx.refit_size + static_cast<int>(extra));
     const double level = kind == EffectKind::kParameterMismatch ? options.significance
                                                                 : options.significance / k_effects;
     c.likelihood_ratio = n_est * std::log(reference / std::max(c.estimation_mse, 1e-300));
@@ -51,13 +84,19 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
   }
   c.validation_mse = (y_val - w.y_val).squaredNorm() / n_val;
   c.nrmse_after = Nrmse(y_val, w.y_val)(0);
-  c.bic = n_val * std::log(std::max(c.validation_mse, 1e-300)) + c.parameters * std::log(double(n_est));
+  c.bic = ValidationBic(n_val, n_est, c.validation_mse, c.parameters, c.nuisance_validation);
   if (kind == EffectKind::kNone) {
     c.signature = 1;
   } else if (kind == EffectKind::kParameterMismatch) {
     c.signature = Correlation(w.y_val - y0_val, y_val - y0_val);
   } else {
     c.signature = Correlation(w.y_val - y_refit_val, y_val - y_refit_val);
+    const long extra = c.nuisance_validation - ctx.refit_nuisance_val;
+    c.validation_gain_z = ValidationGainZ(y_val, y_refit_val, w.y_val,
+                                          extra * c.validation_mse / std::max<long>(1, n_val - c.nuisance_validation));
+    // At the plain level: the effect has already passed the Bonferroni-corrected LR test on the
+    // estimation records; this is an independent confirmation on records it was not fitted to.
+    w.gain_significant = c.validation_gain_z > NormalUpperQuantile(options.significance);
   }
 }
 
@@ -109,7 +148,7 @@ std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const
     CandidateFit& c = w.fit;
     if (c.effect.kind == EffectKind::kNone) c.eligible = true;
     else if (c.effect.kind == EffectKind::kParameterMismatch) c.eligible = c.significant;
-    else c.eligible = c.significant && c.signature >= options.min_signature && !w.masked;
+    else c.eligible = c.significant && !w.masked && (c.signature >= options.min_signature || w.gain_significant);
   }
   std::sort(work.begin(), work.end(), [](const CandidateWork& a, const CandidateWork& b) {
     if (a.fit.eligible != b.fit.eligible) return a.fit.eligible;

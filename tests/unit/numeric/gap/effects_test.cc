@@ -76,6 +76,20 @@ TEST(EffectsTest, TimeDelayShiftsTheResponse) {
   for (int k = 1; k < n; ++k) EXPECT_NEAR(step(k), 2 * (1 - std::exp(-3 * (k * ts - 0.025))), 1e-12);
 }
 
+// A delay far beyond any record (a delay candidate's fit wandering to its parameter bound, on
+// an integrating plant) was an 85 TB delay line and an OOM kill; now a clear error.
+TEST(EffectsTest, ADelayOfMoreThanAHundredMillionSamplesIsRefusedNotAllocated) {
+  const Eigen::VectorXd u = Eigen::VectorXd::Ones(50);
+  try {
+    SimulateWithEffect(FirstOrder(2.0, 3.0), {EffectKind::kTimeDelay, {1e12}}, u, 0.01);
+    FAIL() << "a 10^14-sample delay was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("more than 10^8"), std::string::npos) << e.what();
+  }
+  // Up to the bound it is a plain shift: 10^4 s at 100 Hz delays 50 samples out of the record.
+  EXPECT_TRUE(SimulateWithEffect(FirstOrder(2.0, 3.0), {EffectKind::kTimeDelay, {1e4}}, u, 0.01).isZero(0));
+}
+
 TEST(EffectsTest, ResonanceKeepsTheStaticGainAndSaturationsClip) {
   const int n = 4000;
   const Eigen::VectorXd u = Eigen::VectorXd::Constant(n, 1.5);
