@@ -74,6 +74,25 @@ Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixX
   return scale.asDiagonal() * z;
 }
 
+// The shooting segments of a record's scored samples, as (start, length): one, or every
+// `segment` samples (the remainder spread over them).
+std::vector<std::pair<long, long>> Segments(const GapRecord& record, long segment) {
+  const long first = record.score_from, total = record.y.size() - first;
+  const long count = segment > 0 ? std::max<long>(1, total / segment) : 1;
+  std::vector<std::pair<long, long>> out;
+  for (long j = 0; j < count; ++j) {
+    const long start = first + j * total / count;
+    out.emplace_back(start, first + (j + 1) * total / count - start);
+  }
+  return out;
+}
+
+long Longest(const std::vector<std::pair<long, long>>& segments) {
+  long longest = 0;
+  for (const auto& s : segments) longest = std::max(longest, s.second);
+  return longest;
+}
+
 }  // namespace
 
 Candidate::Candidate(const TransferFunction& base, const CandidateSpec& spec, const Scales& scales,
@@ -274,16 +293,12 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
                                    Nuisance* nuisance) const {
   Eigen::VectorXd y = Simulate(x, record);
   if (!y.allFinite()) return y;
-  const long first = record.score_from, total = record.y.size() - first;
-  const long segments = spec_.segment > 0 ? std::max<long>(1, total / spec_.segment) : 1;
-  const long longest = (total + segments - 1) / segments;
-  TransferFunction linear = Plant(x);
-  for (const Effect& e : Effects(x))
-    if (IsLinearEffect(e.kind)) linear = ApplyLinearEffect(linear, e);
-  const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(linear, record.sample_time, longest)
+  const auto segments = Segments(record, spec_.segment);
+  const long longest = Longest(segments);
+  const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(LinearPart(x), record.sample_time, longest)
                                                 : Eigen::MatrixXd(longest, 0);
-  for (long j = 0; j < segments; ++j) {
-    const long start = first + j * total / segments, len = first + (j + 1) * total / segments - start;
+  for (size_t j = 0; j < segments.size(); ++j) {
+    const auto [start, len] = segments[j];
     const Eigen::VectorXd r = record.y.segment(start, len) - y.segment(start, len);
     const Eigen::VectorXd coef = OffsetAndStateFit(r, free);
     if (coef.allFinite()) {
@@ -311,21 +326,24 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
   return y;
 }
 
-long Candidate::NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapRecord>& records) const {
+TransferFunction Candidate::LinearPart(const Eigen::VectorXd& x) const {
   TransferFunction linear = Plant(x);
   for (const Effect& e : Effects(x))
     if (IsLinearEffect(e.kind)) linear = ApplyLinearEffect(linear, e);
+  return linear;
+}
+
+long Candidate::NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapRecord>& records) const {
+  const TransferFunction linear = LinearPart(x);
   long columns = 0;
   for (const GapRecord& record : records) {
-    const long first = record.score_from, total = record.y.size() - first;
-    const long segments = spec_.segment > 0 ? std::max<long>(1, total / spec_.segment) : 1;
-    const long longest = (total + segments - 1) / segments;
+    const auto segments = Segments(record, spec_.segment);
+    const long longest = Longest(segments);
     const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(linear, record.sample_time, longest)
                                                   : Eigen::MatrixXd(longest, 0);
-    for (long j = 0; j < segments; ++j) {
-      const long len = first + (j + 1) * total / segments - (first + j * total / segments);
+    for (const auto& segment : segments) {
       long rank = 0;
-      OffsetAndStateFit(Eigen::VectorXd::Zero(len), free, &rank);
+      OffsetAndStateFit(Eigen::VectorXd::Zero(segment.second), free, &rank);
       columns += rank;
     }
   }

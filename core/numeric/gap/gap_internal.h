@@ -94,6 +94,9 @@ class Candidate {
   // so a candidate with more states (a lag, a resonance, a higher order), above all under
   // multiple shooting, gets a lower validation MSE for free; the scores count them.
   long NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapRecord>& records) const;
+  // The plant with the linear effects (lag, resonance, delay) folded in: what the free
+  // response of the nuisance comes from.
+  TransferFunction LinearPart(const Eigen::VectorXd& x) const;
 
  private:
   TransferFunction base_;
