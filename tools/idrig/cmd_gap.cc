@@ -1,5 +1,6 @@
 // idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--json]
-// idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--jobs J] [--offsets] [--combos F] [--json]
+// idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--ts S] [--jobs J] [--offsets] [--combos F]
+//                 [--excitation K] [--integrating] [--dump DIR] [--json]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -63,6 +64,7 @@ std::vector<std::string> NamedEffects(const GapReport& report) {
 
 struct BenchSettings {
   int cases = 26, samples = 4000, jobs = 2;
+  double sample_time = 0.01;
   uint64_t seed = 1;
   double snr = 30, combos = 0;
   bool json = false, offsets = false, integrating = false;
@@ -89,6 +91,7 @@ void RunBench(const BenchSettings& b) {
       GapCaseOptions options;
       options.snr_db = b.snr;
       options.samples = b.samples;
+      options.sample_time = b.sample_time;
       options.excitation = b.excitation;
       options.offsets = b.offsets;
       options.integrating = b.integrating;
@@ -122,7 +125,7 @@ void RunBench(const BenchSettings& b) {
 
   const GapBenchScore s = ScoreGapBench(outcomes);
   if (b.json) {
-    nlohmann::json out = {{"cases", b.cases}, {"seed", b.seed}, {"snr_db", b.snr}, {"samples", b.samples},
+    nlohmann::json out = {{"cases", b.cases}, {"seed", b.seed}, {"snr_db", b.snr}, {"samples", b.samples}, {"sample_time", b.sample_time},
                           {"offsets", b.offsets}, {"combos", b.combos},
                           {"integrating", b.integrating}, {"excitation", b.excitation},
                           {"single_cases", s.single_cases},
@@ -145,7 +148,7 @@ void RunBench(const BenchSettings& b) {
     return;
   }
   std::cout << std::setprecision(3) << "cases " << b.cases << ", seed " << b.seed << ", SNR " << b.snr
-            << " dB, " << b.samples << " samples per record"
+            << " dB, " << b.samples << " samples per record at Ts " << b.sample_time << " s"
             << (b.offsets ? ", actuator and sensor offsets" : "") << ", two-effect share " << b.combos
             << "\n"
             << "top-1 accuracy on single effects " << Rate(s.single_correct, s.single_cases) << "\n"
@@ -257,6 +260,8 @@ void RegisterGapCommand(CLI::App& app) {
   bench->add_option("--seed", b->seed, "seed of the case generator");
   bench->add_option("--snr", b->snr, "output SNR in dB");
   bench->add_option("--samples", b->samples, "samples per record")->check(CLI::Range(200, 10000000));
+  bench->add_option("--ts", b->sample_time, "sample time [s] (the plants' corners are 0.7-15 rad/s)")
+      ->check(CLI::Range(1e-5, 1.0));
   bench->add_option("--jobs", b->jobs, "parallel diagnoses")->check(CLI::Range(1, 64));
   bench->add_flag("--json", b->json, "print the summary as JSON");
   bench->add_option("--dump", b->dump, "also write each case (sim model, records, truth) to this directory");

@@ -169,4 +169,39 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   return out;
 }
 
+bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWork& single, std::string& note) {
+  const GapOptions& options = *ctx.options;
+  if (pair.fit.effects.size() != 2 || pair.spec.kinds.size() != 2) return false;
+  for (EffectKind k : pair.spec.kinds)
+    if (k == EffectKind::kOutputQuantization) return false;
+  const Candidate both(*ctx.g0, pair.spec, ctx.scales, options.substeps);
+  if (both.Size() != pair.x.size()) return false;
+  std::vector<CandidateWork> alone(2);
+  ParallelFor(2, options.threads, [&](size_t i) {
+    const std::vector<double> fixed = i < pair.spec.fixed.size() ? pair.spec.fixed[i] : std::vector<double>{};
+    const CandidateSpec spec = SpecFor(ctx, {pair.spec.kinds[i]}, {fixed});
+    // θ, and du where both have it; the effect's own φ through its physical parameters.
+    const Eigen::VectorXd prefix =
+        pair.x.head(both.PlantParams() + (spec.input_offset && pair.spec.input_offset ? both.NuisanceParams() : 0));
+    FitSpec(ctx, spec, {prefix}, {pair.fit.effects[i].params}, alone[i]);
+    ScoreCandidate(ctx, alone[i]);
+    CandidateFit& c = alone[i].fit;
+    c.eligible = c.significant && (c.signature >= options.min_signature || alone[i].gain_significant);
+  }, [&](size_t i) { return std::string("refitting ") + EffectName(pair.spec.kinds[i]) + " alone from the pair"; });
+  const CandidateWork* best = nullptr;
+  for (const CandidateWork& w : alone)
+    if (w.fit.eligible && (!best || w.fit.bic < best->fit.bic)) best = &w;
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "backward check of the pair: %s alone from the pair's fit ΔBIC %.1f%s, %s alone ΔBIC %.1f%s",
+                EffectName(pair.spec.kinds[0]), alone[0].fit.bic - pair.fit.bic,
+                alone[0].fit.eligible ? "" : " (not eligible)", EffectName(pair.spec.kinds[1]),
+                alone[1].fit.bic - pair.fit.bic, alone[1].fit.eligible ? "" : " (not eligible)");
+  note = line;
+  if (!best || !(best->fit.bic < pair.fit.bic + options.ambiguity_bic)) return false;
+  single = *best;
+  note += std::string(": ") + EffectName(best->fit.effect.kind) + " alone is as good, the pair is dropped";
+  return true;
+}
+
 }  // namespace idrig::gap_detail

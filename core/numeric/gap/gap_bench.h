@@ -3,7 +3,9 @@
 // withheld effects with random parameters added to it (the "real rig"), optionally random
 // actuator and sensor offsets (an operating point), output noise at a chosen SNR, and
 // estimation and validation records from independent excitation realisations of one of three
-// kinds (multisine at three amplitude levels with steps; PRBS; random binary). The generator
+// kinds (multisine at three amplitude levels with steps; PRBS; random binary), or on request
+// band-limited Gaussian noise, a random staircase or a logarithmic chirp; optionally
+// integrating plants only. The generator
 // simulates the rig more finely than the diagnosis does (feedback effects with 16 sub-steps),
 // and the diagnosis never sees the case's truth. The bench's plan (which case has which
 // effects) and its scores are here too, so that every front end scores alike.

@@ -247,6 +247,13 @@ struct PairSearch {
   CandidateWork pair;  // when kept: effects = {first's, the second}
   std::string note, lean_note;
 };
+// Backward check after the forward selection: each effect of the kept pair alone (not
+// quantisation, which is placed from the lattice), refitted from the pair's fit (θ, du and its
+// own φ), scored like a single candidate. When an eligible one simulates the validation records
+// within the ambiguity margin of the pair (validation BIC), the other effect adds nothing the
+// data show — the pair search had found a better basin for it, not a second effect — and
+// `single` holds it (returns true). `note` says what was compared.
+bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWork& single, std::string& note);
 // Grid starts of the piecewise effects (limits, dead zone, backlash, friction), whose cost has
 // no gradient where no sample reaches the break: a coarse grid over the tails of u or y (both
 // limits, or one), or over widths; physical units. Empty for the other effects.

@@ -501,7 +501,21 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
       ++searched;
       if (trial.kept && (!best.kept || trial.pair.fit.bic < best.pair.fit.bic)) best = std::move(trial);
     }
-    if (best.kept) {
+    CandidateWork single;
+    std::string prune_note;
+    if (best.kept && PruneToSingle(ctx, best.pair, single, prune_note)) {
+      report.notes.push_back(prune_note);
+      const CandidateFit& c = single.fit;
+      verdict_val_mse = c.validation_mse;
+      v.effect = EffectName(c.effect.kind);
+      AdoptCandidate(c, v);
+      // Its BIC weight among the eligible single candidates (its own kind's first fit replaced).
+      double total = 1.0;
+      for (const CandidateFit& r : report.ranking)
+        if (r.eligible && r.effect.kind != c.effect.kind) total += std::exp(-0.5 * (r.bic - c.bic));
+      v.confidence = 1.0 / total;
+    } else if (best.kept) {
+      if (!prune_note.empty()) report.notes.push_back(prune_note);
       const CandidateFit& c = best.pair.fit;
       verdict_val_mse = c.validation_mse;
       v.effect = EffectName(c.effects.front().kind);

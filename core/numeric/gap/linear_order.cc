@@ -6,6 +6,7 @@
 // the signature check and the validation BIC against the best single candidate — and, when it
 // wins, the verdict is `unmodelled_dynamics` and the diagnosis runs again on the higher-order
 // model to report a static nonlinearity that the missing dynamics had hidden.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -175,8 +176,14 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
     if (compare) return false;
   }
   const GapVerdict& a = after.verdict;
+  // What the higher-order part leaves must be a static or feedback effect: a lag, resonance or
+  // delay found on it is more missing dynamics, not an effect beside them (an output
+  // saturation on an integrating plant came out unmodelled_dynamics + actuator_lag +
+  // unmodelled_resonance).
   const bool found = !a.effects.empty() && a.effect != "ambiguous" && a.effect != "parameter_mismatch" &&
-                     a.effect != "none" && !after.ranking.empty();
+                     a.effect != "none" && !after.ranking.empty() &&
+                     std::none_of(a.effects.begin(), a.effects.end(),
+                                  [](const Effect& e) { return IsLinearEffect(e.kind); });
   if (compare) {
     if (!found) return false;
     const double inner_bic = VerdictBic(ctx, a, after.ranking.front().parameters);

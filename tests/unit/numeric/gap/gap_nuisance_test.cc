@@ -284,6 +284,32 @@ TEST(GapIntegratingTest, FrictionOnADriftingIntegratorDoesNotExhaustMemory) {
   EXPECT_EQ(report.verdict.effect, "coulomb_friction");
 }
 
+TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsDroppedByTheBackwardCheck) {
+  // `idrig gap bench --cases 26 --seed 51 --offsets --ts 0.002 --samples 6000`, case 23: an
+  // output saturation, fast sampling. The single saturation fit stops above the noise; the pair
+  // search from friction finds the saturation's better fit with F_c ≈ 0 beside it, and the
+  // verdict was coulomb_friction + output_saturation. Refitted alone from the pair, the
+  // saturation is as good as the pair.
+  std::mt19937_64 rng(51 * 1000003ULL + 23);
+  GapCaseOptions options;
+  options.offsets = true;
+  options.sample_time = 0.002;
+  options.samples = 6000;
+  const GapCase c = MakeGapCase(EffectKind::kOutputSaturation, rng, options);
+  GapOptions diagnosis;
+  diagnosis.threads = 1;
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, diagnosis);
+  const GapVerdict& v = report.verdict;
+  std::string backward;
+  for (const auto& n : report.notes)
+    if (n.find("backward check") != std::string::npos) backward = n;
+  std::printf("fast-sampled output saturation: verdict %s (%zu effects); %s\n", v.effect.c_str(),
+              v.effects.size(), backward.c_str());
+  EXPECT_EQ(v.effect, "output_saturation");
+  EXPECT_EQ(v.effects.size(), 1u);
+  EXPECT_NE(backward.find("the pair is dropped"), std::string::npos);
+}
+
 TEST(GapBadRecordTest, MostlyClippedRecordGetsAVerdictNotACrash) {
   // An actuator offset so large that the input saturation clips ~90 % of the record.
   GapCase c = LevelsCase(EffectKind::kInputSaturation, 331);
