@@ -66,6 +66,16 @@ jq -e '(.effects | length) == 2 and .input_offset != 0 and .output_offset != 0' 
 expect "must be in [0, 1]" "$idrig" gap bench --cases 1 --combos 1.5
 echo "ok: bench with offsets and pairs"
 
+# The bench's other excitations, integrating plants and sample time (the blind set has its own).
+"$idrig" gap bench --cases 2 --seed 4 --samples 600 --ts 0.02 --excitation steps --integrating --dump "$dir/integ" \
+  --json > "$dir/integ.json" 2>/dev/null || fail "gap bench --excitation steps --integrating exited with $?"
+jq -e '.integrating == true and .sample_time == 0.02 and .excitation == "steps"' "$dir/integ.json" > /dev/null \
+  || fail "bench JSON does not echo its settings"
+jq -e '.excitation == "steps" and .real.den[-1] == 0' "$dir/integ/case1-truth.json" > /dev/null \
+  || fail "case 1 is not an integrating plant under steps"
+expect "noise" "$idrig" gap bench --cases 1 --excitation sweep
+echo "ok: bench excitations, integrating plants, sample time"
+
 # An odd multisine (lines 1, 3, …, 15 of fs/256), 8 periods, through 5/(s+5) and a sensor with a
 # y² term: the even detection lines carry the distortion, the odd ones only noise.
 awk 'BEGIN { srand(1); ts = 0.01; n = 256; a = exp(-5 * ts); pi = atan2(0, -1)
