@@ -220,6 +220,13 @@ GapCase IntegratingBenchCase(EffectKind truth, int index) {
   return MakeGapCase(truth, rng, options);
 }
 
+// The diagnosis as the bench runs it (one thread; the result does not depend on it).
+GapReport DiagnoseOnOneThread(const GapCase& c) {
+  GapOptions options;
+  options.threads = 1;
+  return DiagnoseGap(c.sim, {c.estimation}, {c.validation}, options);
+}
+
 const CandidateFit& Ranked(const GapReport& report, EffectKind kind) {
   const auto it = std::find_if(report.ranking.begin(), report.ranking.end(),
                                [&](const CandidateFit& f) { return f.effect.kind == kind && f.effects.size() <= 1; });
@@ -232,10 +239,7 @@ TEST(GapIntegratingTest, AWeakResonanceUnderADriftIsNamedByItsSignificantValidat
   // G0 leaves: a correlation of 0.14 with the gap, under the 0.2 share, but a validation gain of
   // 3σ (Diebold–Mariano, after the free gain of its extra states). Before, the verdict was none.
   const GapCase c = IntegratingBenchCase(EffectKind::kUnmodelledResonance, 17);
-  ASSERT_EQ(c.truth, EffectKind::kUnmodelledResonance);
-  GapOptions options;
-  options.threads = 1;
-  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, options);
+  const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
   const CandidateFit& resonance = Ranked(report, EffectKind::kUnmodelledResonance);
   std::printf("weak resonance on an integrator: verdict %s, signature %.3f, gain z %.2f, NRMSE %.4f -> %.4f\n",
@@ -254,10 +258,7 @@ TEST(GapIntegratingTest, ExtraStatesFittedOnValidationDoNotBuyAResonanceForADela
   // of validation RSS for nothing. Uncounted, they made the resonance beat the true delay by 17
   // BIC units; counted, the two tie (the data cannot tell this delay from a fast resonance).
   const GapCase c = IntegratingBenchCase(EffectKind::kTimeDelay, 2);
-  ASSERT_EQ(c.truth, EffectKind::kTimeDelay);
-  GapOptions options;
-  options.threads = 1;
-  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, options);
+  const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
   const CandidateFit& delay = Ranked(report, EffectKind::kTimeDelay);
   const CandidateFit& resonance = Ranked(report, EffectKind::kUnmodelledResonance);
@@ -276,10 +277,8 @@ TEST(GapIntegratingTest, FrictionOnADriftingIntegratorDoesNotExhaustMemory) {
   // OOM kill of the bench). Delays are now bounded by the record and the simulator refuses
   // more than 10^8 samples.
   const GapCase c = IntegratingBenchCase(EffectKind::kCoulombFriction, 8);
-  GapOptions options;
-  options.threads = 1;
   GapReport report;
-  ASSERT_NO_THROW(report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, options));
+  ASSERT_NO_THROW(report = DiagnoseOnOneThread(c));
   std::printf("friction on a drifting integrator: verdict %s\n", report.verdict.effect.c_str());
   EXPECT_EQ(report.verdict.effect, "coulomb_friction");
 }
@@ -296,9 +295,7 @@ TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsDroppedByTheBackwardCheck) 
   options.sample_time = 0.002;
   options.samples = 6000;
   const GapCase c = MakeGapCase(EffectKind::kOutputSaturation, rng, options);
-  GapOptions diagnosis;
-  diagnosis.threads = 1;
-  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, diagnosis);
+  const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
   std::string backward;
   for (const auto& n : report.notes)
