@@ -307,6 +307,25 @@ TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsDroppedByTheBackwardCheck) 
   EXPECT_NE(backward.find("the pair is dropped"), std::string::npos);
 }
 
+TEST(GapOffsetTest, OfTwoBarelyReachedLimitsTheUnreachedOneIsReleased) {
+  // `idrig gap bench --cases 26 --seed 52 --offsets --ts 0.05`, case 18: the lower limit is
+  // reached by 0.6 % of the estimation samples, the upper one by none. Both were "few", so
+  // neither was released; the upper one stayed at the edge of the estimation records and
+  // clipped validation samples beyond it, and the one-sided dead zone won (dead_zone, du at
+  // its bound). Now the unreached one is released and the limit named.
+  std::mt19937_64 rng(52 * 1000003ULL + 18);
+  GapCaseOptions options;
+  options.offsets = true;
+  options.sample_time = 0.05;
+  const GapCase c = MakeGapCase(EffectKind::kInputSaturation, rng, options);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const CandidateFit& limit = Ranked(report, EffectKind::kInputSaturation);
+  std::printf("barely reached limits: verdict %s; the limit's note: %s\n", report.verdict.effect.c_str(),
+              limit.note.c_str());
+  EXPECT_EQ(report.verdict.effect, "input_saturation");
+  EXPECT_NE(limit.note.find("upper limit not reached"), std::string::npos);
+}
+
 TEST(GapBadRecordTest, MostlyClippedRecordGetsAVerdictNotACrash) {
   // An actuator offset so large that the input saturation clips ~90 % of the record.
   GapCase c = LevelsCase(EffectKind::kInputSaturation, 331);
