@@ -185,8 +185,7 @@ bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWo
         pair.x.head(both.PlantParams() + (spec.input_offset && pair.spec.input_offset ? both.NuisanceParams() : 0));
     FitSpec(ctx, spec, {prefix}, {pair.fit.effects[i].params}, alone[i]);
     ScoreCandidate(ctx, alone[i]);
-    CandidateFit& c = alone[i].fit;
-    c.eligible = c.significant && (c.signature >= options.min_signature || alone[i].gain_significant);
+    alone[i].fit.eligible = EffectEligible(options, alone[i]);
   }, [&](size_t i) { return std::string("refitting ") + EffectName(pair.spec.kinds[i]) + " alone from the pair"; });
   const CandidateWork* best = nullptr;
   for (const CandidateWork& w : alone)

@@ -141,6 +141,10 @@ void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& wor
   dead->fit.note = line;
 }
 
+bool EffectEligible(const GapOptions& options, const CandidateWork& w) {
+  return w.fit.significant && !w.masked && (w.fit.signature >= options.min_signature || w.gain_significant);
+}
+
 std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const GapOptions& options) {
   // Eligibility: an effect must beat the refitted G0 significantly and reproduce the gap's
   // signature; parameter_mismatch must beat G0; none is always eligible.
@@ -148,7 +152,7 @@ std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const
     CandidateFit& c = w.fit;
     if (c.effect.kind == EffectKind::kNone) c.eligible = true;
     else if (c.effect.kind == EffectKind::kParameterMismatch) c.eligible = c.significant;
-    else c.eligible = c.significant && !w.masked && (c.signature >= options.min_signature || w.gain_significant);
+    else c.eligible = EffectEligible(options, w);
   }
   std::sort(work.begin(), work.end(), [](const CandidateWork& a, const CandidateWork& b) {
     if (a.fit.eligible != b.fit.eligible) return a.fit.eligible;
