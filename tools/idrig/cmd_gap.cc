@@ -85,8 +85,7 @@ void RunBench(const BenchSettings& b) {
   std::mutex print;
   auto worker = [&] {
     for (int i = next++; i < b.cases; i = next++) {
-      // Each case has its own generator: the result does not depend on the thread schedule.
-      std::mt19937_64 rng(b.seed * 1000003ULL + static_cast<uint64_t>(i));
+      std::mt19937_64 rng(BenchCaseSeed(b.seed, i));
       const std::vector<EffectKind> truth = BenchCaseTruth(i, b.combos);
       GapCaseOptions options;
       options.snr_db = b.snr;
@@ -266,7 +265,7 @@ void RegisterGapCommand(CLI::App& app) {
   bench->add_flag("--json", b->json, "print the summary as JSON");
   bench->add_option("--dump", b->dump, "also write each case (sim model, records, truth) to this directory");
   bench->add_option("--excitation", b->excitation, "levels, prbs, rbs, noise (band-limited Gaussian), steps (random staircase) or chirp for every case (default: one of the first three drawn per case)")
-      ->check(CLI::IsMember({"levels", "prbs", "rbs", "noise", "steps", "chirp"}));
+      ->check(CLI::IsMember(BenchExcitations()));
   bench->add_flag("--integrating", b->integrating,
                   "integrating plants only (K/(s(Ts + 1)): position from force, a level from a flow)");
   bench->add_flag("--offsets", b->offsets,

@@ -104,11 +104,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   for (CandidateWork& w : pairs) {
     CandidateFit& c = w.fit;
     if (c.effects.size() < 2) continue;
-    const Candidate cand(*ctx.g0, w.spec, ctx.scales, ctx.options->substeps);
-    if (cand.Size() == w.x.size()) {
-      c.nuisance_estimation = cand.NuisanceColumns(w.x, *ctx.estimation);
-      c.nuisance_validation = cand.NuisanceColumns(w.x, *ctx.validation);
-    }
+    CountNuisance(ctx, w);
     const int dof = std::max(1, c.parameters - one.parameters +
                                     static_cast<int>(std::max<long>(0, c.nuisance_estimation - one.nuisance_estimation)));
     c.likelihood_ratio = ctx.n_est * std::log(one.estimation_mse / std::max(c.estimation_mse, 1e-300));

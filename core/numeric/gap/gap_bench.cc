@@ -327,10 +327,12 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
   const char* kinds[3] = {"levels", "prbs", "rbs"};
   c.excitation = kinds[static_cast<int>(Uniform(rng, 0, 3)) % 3];
   if (!options.excitation.empty()) {
-    static const char* known[] = {"levels", "prbs", "rbs", "noise", "steps", "chirp"};
-    if (std::find(std::begin(known), std::end(known), options.excitation) == std::end(known))
-      throw std::invalid_argument("gap case: excitation '" + options.excitation +
-                                  "' is not one of levels, prbs, rbs, noise, steps, chirp");
+    const auto& known = BenchExcitations();
+    if (std::find(known.begin(), known.end(), options.excitation) == known.end()) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      throw std::invalid_argument("gap case: excitation '" + options.excitation + "' is not one of " + list);
+    }
     c.excitation = options.excitation;
   }
   const double amplitude = Uniform(rng, 0.5, 2.0);
@@ -385,6 +387,11 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
   c.validation.y = record(u_val, c.noise_sigma, rng);
   c.validation.sample_time = options.sample_time;
   return c;
+}
+
+const std::vector<std::string>& BenchExcitations() {
+  static const std::vector<std::string> kinds = {"levels", "prbs", "rbs", "noise", "steps", "chirp"};
+  return kinds;
 }
 
 std::vector<EffectKind> BenchCaseTruth(int index, double combo_share) {

@@ -9,6 +9,7 @@
 // simulates the rig more finely than the diagnosis does (feedback effects with 16 sub-steps),
 // and the diagnosis never sees the case's truth. The bench's plan (which case has which
 // effects) and its scores are here too, so that every front end scores alike.
+#include <cstdint>
 #include <map>
 #include <random>
 #include <string>
@@ -83,6 +84,12 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Eff
 // `combo_share` of the cases, spread evenly, and otherwise a single effect (the vocabulary in
 // turn). combo_share = 0 gives the vocabulary in turn (index mod 13).
 std::vector<EffectKind> BenchCaseTruth(int index, double combo_share);
+// The excitations a case may ask for (GapCaseOptions::excitation): the three drawn by default
+// first, then those drawn only on request.
+const std::vector<std::string>& BenchExcitations();
+// The seed of case `index` of a bench run with seed `seed` (each case its own generator, so a
+// result does not depend on the thread schedule, and any case can be drawn again alone).
+inline uint64_t BenchCaseSeed(uint64_t seed, int index) { return seed * 1000003ULL + static_cast<uint64_t>(index); }
 
 // What a diagnosis said about one case, and its scores.
 struct GapBenchOutcome {

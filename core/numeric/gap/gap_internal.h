@@ -231,6 +231,8 @@ std::vector<std::vector<double>> LinearStarts(const FitContext& ctx, EffectKind 
 // ranking.cc: the likelihood-ratio test, validation MSE/NRMSE/BIC and signature of one fitted
 // candidate; then eligibility, ordering and BIC weights over all of them (best first).
 void ScoreCandidate(const FitContext& ctx, CandidateWork& w);
+// Fills w.fit.nuisance_estimation / nuisance_validation (Candidate::NuisanceColumns of w's fit).
+void CountNuisance(const FitContext& ctx, CandidateWork& w);
 // An effect (not none, not parameter_mismatch) may be the verdict: significant, and its change
 // matches the gap (signature ≥ min_signature) or gains significantly on validation; not masked.
 bool EffectEligible(const GapOptions& options, const CandidateWork& w);

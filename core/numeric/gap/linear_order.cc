@@ -122,12 +122,12 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
 
   const Eigen::VectorXd y_hat = Stack(*ctx.validation, [&](const GapRecord& r) { return cand.Predict(f.x, r); });
   const long extra_nuisance = std::max<long>(0, cand.NuisanceColumns(f.x, *ctx.estimation) - ctx.refit_nuisance_est);
+  const long nuisance_validation = cand.NuisanceColumns(f.x, *ctx.validation);
   const int dof = std::max(1, cand.Size() - ctx.refit_size + static_cast<int>(extra_nuisance));
   const double lr = ctx.n_est * std::log(ctx.refit_fit.mse / std::max(f.mse, 1e-300));
   const double threshold = ChiSquareQuantile(1 - options.significance / ctx.k_effects, dof);
   const double validation_mse = (ctx.y_val - y_hat).squaredNorm() / ctx.n_val;
-  const double bic = ValidationBic(ctx.n_val, ctx.n_est, validation_mse, cand.Size(),
-                                   cand.NuisanceColumns(f.x, *ctx.validation));
+  const double bic = ValidationBic(ctx.n_val, ctx.n_est, validation_mse, cand.Size(), nuisance_validation);
   const double signature = Correlation(y_hat - ctx.y_refit_val, ctx.y_val - ctx.y_refit_val);
   const double nrmse = Nrmse(ctx.y_val, y_hat)(0);
   char line[400];
@@ -153,7 +153,7 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
   check.beats_linear = bic < linear_bic - options.ambiguity_bic;
   check.linear_delta_bic = bic - linear_bic;
   check.plant = cand.Plant(f.x);
-  check.nuisance_validation = cand.NuisanceColumns(f.x, *ctx.validation);
+  check.nuisance_validation = nuisance_validation;
   check.order = order;
   check.nrmse = nrmse;
   return check;

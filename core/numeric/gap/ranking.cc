@@ -48,6 +48,14 @@ double ValidationBic(long n_val, long n_est, double mse, int parameters, long nu
   return n_val * std::log(std::max(unbiased, 1e-300)) + parameters * std::log(double(n_est));
 }
 
+void CountNuisance(const FitContext& ctx, CandidateWork& w) {
+  if (w.x.size() == 0) return;
+  const Candidate cand(*ctx.g0, w.spec, ctx.scales, ctx.options->substeps);
+  if (cand.Size() != w.x.size()) return;
+  w.fit.nuisance_estimation = cand.NuisanceColumns(w.x, *ctx.estimation);
+  w.fit.nuisance_validation = cand.NuisanceColumns(w.x, *ctx.validation);
+}
+
 void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
   CandidateFit& c = w.fit;
   const EffectKind kind = c.effect.kind;
@@ -58,13 +66,7 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
   const Eigen::VectorXd& y0_val = ctx.y0_val;
   const Eigen::VectorXd& y_refit_val = ctx.y_refit_val;
   const int k_effects = ctx.k_effects;
-  if (w.x.size() > 0) {
-    const Candidate cand(*ctx.g0, w.spec, ctx.scales, options.substeps);
-    if (cand.Size() == w.x.size()) {
-      c.nuisance_estimation = cand.NuisanceColumns(w.x, *ctx.estimation);
-      c.nuisance_validation = cand.NuisanceColumns(w.x, *ctx.validation);
-    }
-  }
+  CountNuisance(ctx, w);
   // Likelihood ratio on the estimation records (Wilks): the effect against the refitted G0,
   // the refitted G0 against G0, each at the Bonferroni-corrected level; the nuisance columns an
   // effect adds (a lag's or a resonance's states, per segment) count as parameters.

@@ -213,7 +213,7 @@ INSTANTIATE_TEST_SUITE_P(
 // The bench's integrating plants (K/(s(Ts + 1)), a drifting record from the actuator offset), as
 // `idrig gap bench --integrating --offsets --seed 44` draws them: case `index`.
 GapCase IntegratingBenchCase(EffectKind truth, int index) {
-  std::mt19937_64 rng(44 * 1000003ULL + static_cast<uint64_t>(index));
+  std::mt19937_64 rng(BenchCaseSeed(44, index));
   GapCaseOptions options;
   options.offsets = true;
   options.integrating = true;
@@ -289,7 +289,7 @@ TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsDroppedByTheBackwardCheck) 
   // search from friction finds the saturation's better fit with F_c ≈ 0 beside it, and the
   // verdict was coulomb_friction + output_saturation. Refitted alone from the pair, the
   // saturation is as good as the pair.
-  std::mt19937_64 rng(51 * 1000003ULL + 23);
+  std::mt19937_64 rng(BenchCaseSeed(51, 23));
   GapCaseOptions options;
   options.offsets = true;
   options.sample_time = 0.002;
@@ -313,7 +313,7 @@ TEST(GapOffsetTest, OfTwoBarelyReachedLimitsTheUnreachedOneIsReleased) {
   // neither was released; the upper one stayed at the edge of the estimation records and
   // clipped validation samples beyond it, and the one-sided dead zone won (dead_zone, du at
   // its bound). Now the unreached one is released and the limit named.
-  std::mt19937_64 rng(52 * 1000003ULL + 18);
+  std::mt19937_64 rng(BenchCaseSeed(52, 18));
   GapCaseOptions options;
   options.offsets = true;
   options.sample_time = 0.05;
