@@ -271,40 +271,143 @@ void SmoothedStaircase(Eigen::VectorXd& y, double q, double s) {
   }
 }
 
-Eigen::VectorXd Candidate::Simulate(const Eigen::VectorXd& x, const GapRecord& record) const {
+namespace {
+
+bool IsOutputMap(EffectKind kind) {
+  return kind == EffectKind::kOutputSaturation || kind == EffectKind::kSensorNonlinearity;
+}
+
+// The output maps (saturation, sensor map) in the order given, on z, and their derivative
+// d map/dz (chain rule through several maps).
+void ApplyOutputMaps(const std::vector<Effect>& maps, Eigen::VectorXd& z, Eigen::VectorXd* slope) {
+  if (slope) slope->setOnes(z.size());
+  for (const Effect& e : maps) {
+    const auto& p = e.params;
+    for (long k = 0; k < z.size(); ++k) {
+      double d = 1.0;
+      if (e.kind == EffectKind::kOutputSaturation) {
+        d = z(k) > p[0] && z(k) < p[1] ? 1.0 : 0.0;
+        z(k) = std::clamp(z(k), p[0], p[1]);
+      } else {
+        d = p[3] != 0.0 ? p[0] * (z(k) < 0 ? -1.0 : 1.0) : p[0] + z(k) * (2 * p[1] + 3 * p[2] * z(k));
+        z(k) = SensorMap(z(k), p);
+      }
+      if (slope) (*slope)(k) *= d;
+    }
+  }
+}
+
+}  // namespace
+
+Eigen::VectorXd Candidate::Simulate(const Eigen::VectorXd& x, const GapRecord& record,
+                                    std::vector<Effect>* output_maps) const {
   EffectSimulationOptions options;
   options.substeps = substeps_;
   std::vector<Effect> effects = Effects(x);
-  // Quantisation is applied in Predict, after the nuisance (see there).
+  // Quantisation is applied in Predict, after the nuisance (see there); so are the output maps
+  // when the caller takes them (they then act on the free response as well).
   effects.erase(std::remove_if(effects.begin(), effects.end(),
-                               [](const Effect& e) { return e.kind == EffectKind::kOutputQuantization; }),
+                               [&](const Effect& e) {
+                                 if (output_maps && IsOutputMap(e.kind)) output_maps->push_back(e);
+                                 return e.kind == EffectKind::kOutputQuantization ||
+                                        (output_maps && IsOutputMap(e.kind));
+                               }),
                 effects.end());
   const double du = InputOffset(x);
   const Eigen::VectorXd u = du != 0 ? Eigen::VectorXd(record.u.array() + du) : record.u;
   return SimulateWithEffects(Plant(x), effects, u, record.sample_time, options);
 }
 
+namespace {
+
+// The nuisance of one segment through the output maps, ŷ = map(z + F·x0) + b (a sensor offset
+// after the map; the segment's state before it, where the plant's state is): Gauss–Newton on
+// (b, x0) with the map linearised, J = [1, diag(map'(z + F·x0))·F], each step the same
+// equilibrated least squares as without maps. Two starts, the better kept: x0 = 0 (the
+// simulation from rest is right: a |y| sensor folds, and a start on the wrong side of the fold
+// is the mirror basin), and the state the segment would need were the maps the identity (the
+// right basin when the simulation from rest has drifted into a clip that the rig's own state
+// never reaches: at x0 = 0 the clipped samples have no slope, and Gauss–Newton could not leave
+// them). Exact for the maps' pieces the samples sit on.
+Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen::VectorXd& z,
+                                          const Eigen::MatrixXd& free, const std::vector<Effect>& maps,
+                                          Eigen::VectorXd* fitted) {
+  const long len = y.size(), rows = std::min<long>(len, free.rows()), n = free.cols();
+  auto evaluate = [&](const Eigen::VectorXd& coef, Eigen::VectorXd& m, Eigen::VectorXd* slope) {
+    m = z;
+    if (n > 0) m.head(rows) += free.topRows(rows) * coef.tail(n);
+    ApplyOutputMaps(maps, m, slope);
+    m.array() += coef(0);
+    return (y - m).squaredNorm();
+  };
+  // A fixed number of full steps, each kept only when it lowers the sum of squares: the result
+  // is then a smooth function of the candidate's parameters wherever the clipped samples do
+  // not change (an inexact inner solve with a tolerance would put noise into the outer fit's
+  // finite-difference Jacobian).
+  auto refine = [&](Eigen::VectorXd coef, double& best) {
+    Eigen::VectorXd m, slope;
+    best = evaluate(coef, m, &slope);
+    for (int it = 0; it < 4 && std::isfinite(best); ++it) {
+      const Eigen::MatrixXd weighted = slope.head(rows).asDiagonal() * free.topRows(rows);
+      const Eigen::VectorXd trial = coef + OffsetAndStateFit(y - m, weighted);
+      Eigen::VectorXd m_trial, slope_trial;
+      const double next = evaluate(trial, m_trial, &slope_trial);
+      if (!(next < best)) break;
+      coef = trial, m.swap(m_trial), slope.swap(slope_trial), best = next;
+    }
+    return coef;
+  };
+  Eigen::VectorXd mapped = z;
+  ApplyOutputMaps(maps, mapped, nullptr);
+  Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(1 + n);
+  at_rest(0) = (y - mapped).mean();
+  double sse_rest = INFINITY, sse_identity = INFINITY;
+  Eigen::VectorXd coef = refine(at_rest, sse_rest);
+  if (n > 0) {
+    const Eigen::VectorXd other = refine(OffsetAndStateFit(y - z, free), sse_identity);
+    if (sse_identity < sse_rest) coef = other;
+  }
+  if (fitted) evaluate(coef, *fitted, nullptr);
+  return coef;
+}
+
+}  // namespace
+
 // Nuisance parameters by variable projection (Golub–Pereyra): the output offset and the free
 // initial state enter the prediction linearly, ŷ = ŷ_sim + b·1 + F(θ)·x0 on each segment
 // (F = the sampled plant's free response C A^k), so for given θ, φ they are the least-squares
 // solution, eliminated from the nonlinear fit. With `segment` > 0 every segment of that many
-// samples gets its own state (multiple shooting without continuity constraints).
+// samples gets its own state (multiple shooting without continuity constraints). A candidate
+// with an output map has ŷ = map(ŷ_sim + F(θ)·x0) + b instead, fitted by Gauss–Newton
+// (OffsetAndStateThroughMaps): the segment's state is the plant's, before the sensor.
 Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& record,
                                    Nuisance* nuisance) const {
-  Eigen::VectorXd y = Simulate(x, record);
+  std::vector<Effect> maps;
+  Eigen::VectorXd y = Simulate(x, record, spec_.free_state ? &maps : nullptr);
   if (!y.allFinite()) return y;
   const auto segments = Segments(record, spec_.segment);
   const long longest = Longest(segments);
   const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(LinearPart(x), record.sample_time, longest)
                                                 : Eigen::MatrixXd(longest, 0);
+  if (!maps.empty() && !segments.empty()) {  // the unscored warm-up: the maps alone
+    Eigen::VectorXd head = y.head(segments.front().first);
+    ApplyOutputMaps(maps, head, nullptr);
+    y.head(head.size()) = head;
+  }
   for (size_t j = 0; j < segments.size(); ++j) {
     const auto [start, len] = segments[j];
-    const Eigen::VectorXd r = record.y.segment(start, len) - y.segment(start, len);
-    const Eigen::VectorXd coef = OffsetAndStateFit(r, free);
-    if (coef.allFinite()) {
-      y.segment(start, len).array() += coef(0);
-      const long rows = std::min<long>(len, free.rows());
-      if (free.cols() > 0) y.segment(start, rows) += free.topRows(rows) * coef.tail(free.cols());
+    Eigen::VectorXd coef;
+    if (!maps.empty()) {  // the state inside the maps, the offset after them
+      Eigen::VectorXd fitted;
+      coef = OffsetAndStateThroughMaps(record.y.segment(start, len), y.segment(start, len), free, maps, &fitted);
+      y.segment(start, len) = fitted;
+    } else {
+      coef = OffsetAndStateFit(record.y.segment(start, len) - y.segment(start, len), free);
+      if (coef.allFinite()) {
+        y.segment(start, len).array() += coef(0);
+        const long rows = std::min<long>(len, free.rows());
+        if (free.cols() > 0) y.segment(start, rows) += free.topRows(rows) * coef.tail(free.cols());
+      }
     }
     if (nuisance && j == 0) {
       nuisance->output_offset = coef(0);
@@ -582,8 +685,16 @@ void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w) {
       const auto linear = LinearStarts(ctx, kind, refit, ctx.refit_fit.x);
       starts.insert(starts.begin(), linear.begin(), linear.end());
     }
+    std::vector<Eigen::VectorXd> prefixes = {from_refit, from_g0};
+    if (spec.input_offset && ctx.integrating) {
+      // On an integrating plant the actuator offset sets the drift the per-segment states
+      // cannot take: G0 as given with the refit's du (the refit's θ has also bent to the effect).
+      Eigen::VectorXd g0_du = from_g0;
+      g0_du(ctx.refit_size - 1) = from_refit(ctx.refit_size - 1);  // x = [θ | du]
+      prefixes.push_back(g0_du);
+    }
     CandidateWork trial;
-    FitSpec(ctx, spec, {from_refit, from_g0}, starts, trial);
+    FitSpec(ctx, spec, prefixes, starts, trial);
     evaluations += trial.fit.evaluations;
     const double criterion = ctx.n_est * std::log(trial.fit.estimation_mse) +
                              trial.fit.parameters * std::log(double(ctx.n_est));

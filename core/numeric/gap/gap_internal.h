@@ -84,8 +84,10 @@ class Candidate {
   std::vector<Effect> Effects(const Eigen::VectorXd& x) const;
   // Inverse of EffectAt for block i, for starting points given in physical units.
   Eigen::VectorXd Phi(size_t i, const std::vector<double>& p) const;
-  // The plant with its effects and input offset, from rest (no output nuisance).
-  Eigen::VectorXd Simulate(const Eigen::VectorXd& x, const GapRecord& record) const;
+  // The plant with its effects and input offset, from rest (no output nuisance). With
+  // `output_maps`, the output saturation and sensor map are left out and returned there.
+  Eigen::VectorXd Simulate(const Eigen::VectorXd& x, const GapRecord& record,
+                           std::vector<Effect>* output_maps = nullptr) const;
   // Simulate + the output offset and free initial state(s) fitted by least squares.
   Eigen::VectorXd Predict(const Eigen::VectorXd& x, const GapRecord& record,
                           Nuisance* nuisance = nullptr) const;

@@ -283,6 +283,37 @@ TEST(GapIntegratingTest, FrictionOnADriftingIntegratorDoesNotExhaustMemory) {
   EXPECT_EQ(report.verdict.effect, "coulomb_friction");
 }
 
+TEST(GapIntegratingTest, AnOutputClipActsOnEachSegmentsOwnState) {
+  // A PRBS drives an integrator into both output limits for a third of the record. Under
+  // multiple shooting the segment's free state is the plant's, so the clip acts on it: with the
+  // state added after the clip (before), no saturation fitted down to the noise and the verdict
+  // was unmodelled_dynamics.
+  const GapCase c = IntegratingBenchCase(EffectKind::kOutputSaturation, 23);
+  ASSERT_EQ(c.excitation, "prbs");
+  const GapReport report = DiagnoseOnOneThread(c);
+  const GapVerdict& v = report.verdict;
+  const CandidateFit& clip = Ranked(report, EffectKind::kOutputSaturation);
+  const double noise_var = c.noise_sigma * c.noise_sigma;
+  std::printf("output clip on an integrator: verdict %s (%zu effects), estimation MSE %.5f (noise %.5f), NRMSE %.4f -> %.4f\n",
+              v.effect.c_str(), v.effects.size(), clip.estimation_mse, noise_var, v.nrmse_before, v.nrmse_after);
+  ASSERT_EQ(v.fit_scheme, "multiple_shooting");
+  EXPECT_EQ(v.effect, "output_saturation");
+  // Near the generator's noise (1.23 times it; 2.1 times before, 0.0128).
+  EXPECT_LT(clip.estimation_mse, 1.3 * noise_var);
+}
+
+TEST(GapIntegratingTest, AnAbsoluteValueSensorKeepsItsFoldUnderMultipleShooting) {
+  // The |y| sensor folds the output: a segment's state started where the maps were the
+  // identity lands in the mirror basin, so the state from rest is tried too (with that start
+  // alone, this case came out unmodelled_resonance + actuator_lag).
+  const GapCase c = IntegratingBenchCase(EffectKind::kSensorNonlinearity, 11);
+  ASSERT_NE(c.effect.params.at(3), 0.0);  // the |y| variant
+  const GapReport report = DiagnoseOnOneThread(c);
+  std::printf("|y| sensor on an integrator: verdict %s\n", report.verdict.effect.c_str());
+  EXPECT_EQ(report.verdict.effect, "sensor_nonlinearity");
+  EXPECT_EQ(report.verdict.effects.size(), 1u);
+}
+
 TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsDroppedByTheBackwardCheck) {
   // `idrig gap bench --cases 26 --seed 51 --offsets --ts 0.002 --samples 6000`, case 23: an
   // output saturation, fast sampling. The single saturation fit stops above the noise; the pair
