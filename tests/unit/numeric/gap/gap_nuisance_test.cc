@@ -314,12 +314,14 @@ TEST(GapIntegratingTest, AnAbsoluteValueSensorKeepsItsFoldUnderMultipleShooting)
   EXPECT_EQ(report.verdict.effects.size(), 1u);
 }
 
-TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsDroppedByTheBackwardCheck) {
+TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsNotReported) {
   // `idrig gap bench --cases 26 --seed 51 --offsets --ts 0.002 --samples 6000`, case 23: an
-  // output saturation, fast sampling. The single saturation fit stops above the noise; the pair
-  // search from friction finds the saturation's better fit with F_c ≈ 0 beside it, and the
-  // verdict was coulomb_friction + output_saturation. Refitted alone from the pair, the
-  // saturation is as good as the pair.
+  // output saturation, fast sampling. The single saturation fit had stopped above the noise; the
+  // pair search from friction found the saturation's better fit with F_c ≈ 0 beside it, and the
+  // verdict was coulomb_friction + output_saturation, until the backward check (each effect
+  // refitted alone from the pair's fit) dropped the pair. Since the output maps act on the
+  // segment's state the single fit reaches the noise floor and the pair search does not run.
+  // Either way one effect is reported; a pair that is searched must be dropped.
   std::mt19937_64 rng(BenchCaseSeed(51, 23));
   GapCaseOptions options;
   options.offsets = true;
@@ -328,14 +330,18 @@ TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsDroppedByTheBackwardCheck) 
   const GapCase c = MakeGapCase(EffectKind::kOutputSaturation, rng, options);
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
-  std::string backward;
-  for (const auto& n : report.notes)
+  std::string backward, second;
+  for (const auto& n : report.notes) {
     if (n.find("backward check") != std::string::npos) backward = n;
-  std::printf("fast-sampled output saturation: verdict %s (%zu effects); %s\n", v.effect.c_str(),
-              v.effects.size(), backward.c_str());
+    if (n.find("second effect after") != std::string::npos) second = n;
+  }
+  std::printf("fast-sampled output saturation: verdict %s (%zu effects); %s; %s\n", v.effect.c_str(),
+              v.effects.size(), second.c_str(), backward.c_str());
   EXPECT_EQ(v.effect, "output_saturation");
   EXPECT_EQ(v.effects.size(), 1u);
-  EXPECT_NE(backward.find("the pair is dropped"), std::string::npos);
+  const bool not_searched = second.find("not searched") != std::string::npos;
+  const bool dropped = backward.find("the pair is dropped") != std::string::npos;
+  EXPECT_TRUE(not_searched || dropped) << second << " / " << backward;
 }
 
 TEST(GapOffsetTest, OfTwoBarelyReachedLimitsTheUnreachedOneIsReleased) {
