@@ -74,6 +74,12 @@ jq -e '.integrating == true and .sample_time == 0.02 and .excitation == "steps"'
 jq -e '.excitation == "steps" and .real.den[-1] == 0' "$dir/integ/case1-truth.json" > /dev/null \
   || fail "case 1 is not an integrating plant under steps"
 expect "noise" "$idrig" gap bench --cases 1 --excitation sweep
+# Lightly damped plants and coloured noise; bad ranges are named.
+"$idrig" gap bench --cases 1 --seed 4 --samples 600 --damping 0.02,0.1 --noise-pole 0.5 --json > "$dir/ld.json" 2>/dev/null \
+  || fail "gap bench --damping --noise-pole exited with $?"
+jq -e '.damping == [0.02, 0.1] and .noise_pole == 0.5' "$dir/ld.json" > /dev/null || fail "bench JSON lacks damping/noise_pole"
+expect "LO <= HI" "$idrig" gap bench --cases 1 --damping 0.5,0.1
+expect "noise-pole" "$idrig" gap bench --cases 1 --noise-pole 1.5
 echo "ok: bench excitations, integrating plants, sample time"
 
 # An odd multisine (lines 1, 3, …, 15 of fs/256), 8 periods, through 5/(s+5) and a sensor with a

@@ -1,6 +1,6 @@
 // idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--json]
 // idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--ts S] [--jobs J] [--offsets] [--combos F]
-//                 [--excitation K] [--integrating] [--dump DIR] [--json]
+//                 [--excitation K] [--integrating] [--damping LO,HI] [--noise-pole A] [--dump DIR] [--json]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -66,7 +66,8 @@ struct BenchSettings {
   int cases = 26, samples = 4000, jobs = 2;
   double sample_time = 0.01;
   uint64_t seed = 1;
-  double snr = 30, combos = 0;
+  double snr = 30, combos = 0, noise_pole = 0;
+  std::vector<double> damping = {0.15, 0.8};
   bool json = false, offsets = false, integrating = false;
   std::string dump, excitation;
 };
@@ -79,6 +80,8 @@ std::string Rate(int num, int den) {
 
 void RunBench(const BenchSettings& b) {
   BenchCaseTruth(0, b.combos);  // throws std::invalid_argument for a share outside [0, 1]
+  if (!(b.damping.size() == 2 && b.damping[0] <= b.damping[1]))
+    throw std::invalid_argument("gap bench: --damping needs LO,HI with LO <= HI");
   if (!b.dump.empty()) std::filesystem::create_directories(b.dump);
   std::vector<GapBenchOutcome> outcomes(b.cases);
   std::atomic<int> next{0};
@@ -94,6 +97,9 @@ void RunBench(const BenchSettings& b) {
       options.excitation = b.excitation;
       options.offsets = b.offsets;
       options.integrating = b.integrating;
+      options.zeta_min = b.damping[0];
+      options.zeta_max = b.damping[1];
+      options.noise_pole = b.noise_pole;
       const GapCase c = MakeGapCase(truth, rng, options);
       if (!b.dump.empty()) WriteCase(c, b.dump, i);
       const auto start = std::chrono::steady_clock::now();
@@ -127,6 +133,7 @@ void RunBench(const BenchSettings& b) {
     nlohmann::json out = {{"cases", b.cases}, {"seed", b.seed}, {"snr_db", b.snr}, {"samples", b.samples}, {"sample_time", b.sample_time},
                           {"offsets", b.offsets}, {"combos", b.combos},
                           {"integrating", b.integrating}, {"excitation", b.excitation},
+                          {"damping", b.damping}, {"noise_pole", b.noise_pole},
                           {"single_cases", s.single_cases},
                           {"top1_accuracy", s.top1_accuracy}, {"false_alarm_rate", s.false_alarm_rate},
                           {"single_extra_effect", s.single_extra},
@@ -268,6 +275,14 @@ void RegisterGapCommand(CLI::App& app) {
       ->check(CLI::IsMember(BenchExcitations()));
   bench->add_flag("--integrating", b->integrating,
                   "integrating plants only (K/(s(Ts + 1)): position from force, a level from a flow)");
+  bench->add_option("--damping", b->damping,
+                    "range LO,HI of the plants' damping ratio (default 0.15,0.8; e.g. 0.02,0.1 for lightly damped rigs)")
+      ->expected(2)
+      ->delimiter(',')
+      ->check(CLI::Range(0.001, 5.0));
+  bench->add_option("--noise-pole", b->noise_pole,
+                    "colour the output noise: first-order pole A in [0, 0.99] (0: white; same variance)")
+      ->check(CLI::Range(0.0, 0.99));
   bench->add_flag("--offsets", b->offsets,
                   "random actuator offset (up to ±30 % of the command's peak) and sensor offset "
                   "(10–100 % of the output range) on every case");

@@ -18,8 +18,8 @@ double Gaussian(std::mt19937_64& rng) { return std::normal_distribution<double>(
 // Random stable plant: first order, a mass–spring–damper, or the two in series. Position-like
 // output (second order at least) for friction and cubic stiffness.
 TransferFunction RandomPlant(EffectKind truth, std::mt19937_64& rng, double* bandwidth,
-                             bool integrating = false) {
-  if (integrating) {
+                             const GapCaseOptions& options) {
+  if (options.integrating) {
     // Position from force (a damped mass, K/(s(s + c))) or a level from a flow through a pump
     // lag: both K/(s(Ts + 1)) with one integrator; "bandwidth" is the lag's corner.
     const double corner = Uniform(rng, 2.0, 10.0);
@@ -32,7 +32,7 @@ TransferFunction RandomPlant(EffectKind truth, std::mt19937_64& rng, double* ban
   }
   const double gain = Uniform(rng, 0.5, 2.0);
   const double omega = Uniform(rng, 2.0, 15.0);
-  const double zeta = Uniform(rng, 0.15, 0.8);
+  const double zeta = Uniform(rng, options.zeta_min, options.zeta_max);
   int shape = static_cast<int>(Uniform(rng, 0, 3));
   if (IsFeedbackEffect(truth) && shape == 0) shape = 1;
   TransferFunction tf;
@@ -248,8 +248,9 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const Effect& effect,
 
 Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Effect>& effects_in,
                             const Eigen::VectorXd& u, double sample_time, double noise_sigma,
-                            std::mt19937_64& rng, double input_offset, double output_offset) {
-  if (effects_in.size() <= 1 && input_offset == 0 && output_offset == 0)
+                            std::mt19937_64& rng, double input_offset, double output_offset,
+                            double noise_pole) {
+  if (effects_in.size() <= 1 && input_offset == 0 && output_offset == 0 && noise_pole == 0)
     return SimulateRig(plant, effects_in.empty() ? Effect{} : effects_in.front(), u, sample_time,
                        noise_sigma, rng);
   std::vector<Effect> effects = effects_in;
@@ -292,8 +293,11 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Eff
     else
       for (long k = 0; k < y.size(); ++k) y(k) = SensorMap(y(k), e->params);
   }
+  const double innovation = std::sqrt(1 - noise_pole * noise_pole);
+  double e = 0;
   for (long k = 0; k < y.size(); ++k) {
-    y(k) += noise_sigma * Gaussian(rng);
+    e = k == 0 ? Gaussian(rng) : noise_pole * e + innovation * Gaussian(rng);
+    y(k) += noise_sigma * e;
     if (quantizer) y(k) = quantizer->params[0] * std::round(y(k) / quantizer->params[0]);
     y(k) += output_offset;
   }
@@ -322,7 +326,7 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
   c.truths = truths;
   const EffectKind shape_of = truths.size() == 2 && IsFeedbackEffect(truths[1]) ? truths[1] : truths[0];
   double bandwidth = 1;
-  c.sim = RandomPlant(shape_of, rng, &bandwidth, options.integrating);
+  c.sim = RandomPlant(shape_of, rng, &bandwidth, options);
   c.real = c.sim;
   const char* kinds[3] = {"levels", "prbs", "rbs"};
   c.excitation = kinds[static_cast<int>(Uniform(rng, 0, 3)) % 3];
@@ -372,7 +376,7 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
     Eigen::VectorXd padded = Eigen::VectorXd::Zero(warm + u.size());
     padded.tail(u.size()) = u;
     const Eigen::VectorXd y = SimulateRig(c.real, c.effects, padded, options.sample_time, sigma, g,
-                                          c.input_offset, c.output_offset);
+                                          c.input_offset, c.output_offset, options.noise_pole);
     return Eigen::VectorXd(y.tail(u.size()));
   };
   // Noise from the SNR of the rig's own output on the estimation input.

@@ -37,6 +37,12 @@ struct GapCaseOptions {
   // Integrating plants only (K/(s(Ts + 1)): position from force, a level from a flow). The
   // records then drift with any actuator offset, as on such a rig run open loop.
   bool integrating = false;
+  // Damping ratio ζ of the second- and third-order plants' mode, drawn uniformly in
+  // [zeta_min, zeta_max] (ζ < 0.1: lightly damped, the records ring; the draw consumes the same
+  // random numbers whatever the range, so a seed's other draws do not move).
+  double zeta_min = 0.15, zeta_max = 0.8;
+  // Output noise coloured by a first-order pole a in [0, 1) (0: white), of the same variance.
+  double noise_pole = 0;
 };
 
 struct GapCase {
@@ -71,14 +77,16 @@ const std::vector<std::pair<EffectKind, EffectKind>>& CoOccurringEffectPairs();
 // quantisation the noise before the rounding (a noisy signal digitised by an ADC). Several
 // effects act in stage order: actuator offset, input maps (saturation, dead zone, backlash),
 // the linear effects folded into the plant, one feedback effect (friction or cubic stiffness),
-// output maps (saturation, sensor), noise, ADC (quantisation), sensor offset.
+// output maps (saturation, sensor), noise, ADC (quantisation), sensor offset. With noise_pole
+// a ≠ 0 the noise is coloured, first-order autoregressive e(k) = a e(k−1) + √(1 − a²) σ w(k)
+// (the same variance σ², the same random numbers as white noise).
 Eigen::VectorXd SimulateRig(const TransferFunction& plant, const Effect& effect,
                             const Eigen::VectorXd& u, double sample_time, double noise_sigma,
                             std::mt19937_64& rng);
 Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Effect>& effects,
                             const Eigen::VectorXd& u, double sample_time, double noise_sigma,
                             std::mt19937_64& rng, double input_offset = 0,
-                            double output_offset = 0);
+                            double output_offset = 0, double noise_pole = 0);
 
 // The bench's plan: case `index` has a pair (CoOccurringEffectPairs in turn) for a share
 // `combo_share` of the cases, spread evenly, and otherwise a single effect (the vocabulary in

@@ -36,6 +36,47 @@ TEST(GapBenchTest, OffsetsShiftALinearRigByTheSteadyStateOfTheActuatorOffsetAndT
   }
 }
 
+TEST(GapBenchTest, ColouredNoiseHasTheRequestedPoleAndTheSameVariance) {
+  // AR(1) noise e(k) = a e(k−1) + √(1 − a²) σ w(k): variance σ², lag-1 autocorrelation a
+  // (closed form), on a linear rig without effects, so y − G u − offsets is the noise.
+  for (const double a : {0.0, 0.5, 0.9}) {
+    std::mt19937_64 rng(11);
+    GapCaseOptions options;
+    options.samples = 20000;
+    options.offsets = true;
+    options.noise_pole = a;
+    const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
+    const double dc = c.real.num(c.real.num.size() - 1) / c.real.den(c.real.den.size() - 1);
+    const Eigen::VectorXd lin = Simulate(c.real, c.estimation.u, c.estimation.sample_time).col(0);
+    const Eigen::VectorXd e =
+        c.estimation.y - lin - Eigen::VectorXd::Constant(lin.size(), dc * c.input_offset + c.output_offset);
+    const long n = e.size();
+    const double var = e.squaredNorm() / n;
+    const double lag1 = e.head(n - 1).dot(e.tail(n - 1)) / (n - 1) / var;
+    EXPECT_NEAR(std::sqrt(var), c.noise_sigma, (a > 0.8 ? 0.1 : 0.05) * c.noise_sigma) << "pole " << a;
+    EXPECT_NEAR(lag1, a, 0.03) << "pole " << a;
+  }
+}
+
+TEST(GapBenchTest, DampingRatiosAreDrawnInTheRequestedRange) {
+  // ζ of a second-order plant s² + 2ζω s + ω²: den(1)/(2√den(2)).
+  int second_order = 0;
+  for (uint64_t seed = 1; seed <= 40; ++seed) {
+    std::mt19937_64 rng(seed);
+    GapCaseOptions options;
+    options.samples = 300;
+    options.zeta_min = 0.02;
+    options.zeta_max = 0.1;
+    const GapCase c = MakeGapCase(EffectKind::kCubicStiffness, rng, options);  // second order or more
+    if (c.real.den.size() != 3) continue;
+    ++second_order;
+    const double zeta = c.real.den(1) / (2 * std::sqrt(c.real.den(2)));
+    EXPECT_GE(zeta, 0.02 - 1e-12);
+    EXPECT_LE(zeta, 0.1 + 1e-12);
+  }
+  EXPECT_GT(second_order, 5);
+}
+
 TEST(GapBenchTest, BacklashWithQuantisationReadsOnALatticeOffsetByTheSensorOffset) {
   std::mt19937_64 rng(7);
   GapCaseOptions options;
