@@ -13,6 +13,14 @@
 namespace idrig {
 namespace {
 
+// The noise of a linear stable rig without effects: by superposition (settled at G(0)·u_off
+// before the record starts) y = G u + G(0) u_off + y_off + noise.
+Eigen::VectorXd NoiseOf(const GapCase& c) {
+  const double dc = c.real.num(c.real.num.size() - 1) / c.real.den(c.real.den.size() - 1);
+  const Eigen::VectorXd lin = Simulate(c.real, c.estimation.u, c.estimation.sample_time).col(0);
+  return c.estimation.y - lin - Eigen::VectorXd::Constant(lin.size(), dc * c.input_offset + c.output_offset);
+}
+
 TEST(GapBenchTest, OffsetsShiftALinearRigByTheSteadyStateOfTheActuatorOffsetAndTheSensorOffset) {
   for (uint64_t seed = 1; seed <= 3; ++seed) {
     std::mt19937_64 rng(seed);
@@ -24,10 +32,7 @@ TEST(GapBenchTest, OffsetsShiftALinearRigByTheSteadyStateOfTheActuatorOffsetAndT
     const double u_peak = c.estimation.u.cwiseAbs().maxCoeff();
     EXPECT_LE(std::abs(c.input_offset), 0.3 * u_peak + 1e-12);
     EXPECT_GT(std::abs(c.output_offset), 0.0);
-    // Superposition: settled at G(0)·u_off before the record starts, so y = G u + G(0) u_off + y_off.
-    const double dc = c.real.num(c.real.num.size() - 1) / c.real.den(c.real.den.size() - 1);
-    const Eigen::VectorXd lin = Simulate(c.real, c.estimation.u, c.estimation.sample_time).col(0);
-    const Eigen::VectorXd e = c.estimation.y - lin - Eigen::VectorXd::Constant(lin.size(), dc * c.input_offset + c.output_offset);
+    const Eigen::VectorXd e = NoiseOf(c);
     const double rms = std::sqrt(e.squaredNorm() / e.size());
     EXPECT_NEAR(rms, c.noise_sigma, 0.15 * c.noise_sigma) << "seed " << seed;
     // The sensor offset is a sizeable share of the output's range.
@@ -46,10 +51,7 @@ TEST(GapBenchTest, ColouredNoiseHasTheRequestedPoleAndTheSameVariance) {
     options.offsets = true;
     options.noise_pole = a;
     const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
-    const double dc = c.real.num(c.real.num.size() - 1) / c.real.den(c.real.den.size() - 1);
-    const Eigen::VectorXd lin = Simulate(c.real, c.estimation.u, c.estimation.sample_time).col(0);
-    const Eigen::VectorXd e =
-        c.estimation.y - lin - Eigen::VectorXd::Constant(lin.size(), dc * c.input_offset + c.output_offset);
+    const Eigen::VectorXd e = NoiseOf(c);
     const long n = e.size();
     const double var = e.squaredNorm() / n;
     const double lag1 = e.head(n - 1).dot(e.tail(n - 1)) / (n - 1) / var;
