@@ -171,6 +171,10 @@ struct GapReport {
   GapWhere where;
   std::vector<std::string> notes;     // what was assumed (e.g. "split in time at 50 %")
   int estimation_samples = 0, validation_samples = 0;
+  // The verdict's simulation of the validation records (their scored samples, stacked): the
+  // fitted candidate, pair or higher-order part the verdict names (a quantiser named from the
+  // lattice alone, with nothing fitted, leaves it at what was fitted before).
+  Eigen::VectorXd validation_prediction;
 };
 
 // Throws std::invalid_argument for: no records, NaN, mismatched lengths, a constant input,

@@ -284,6 +284,7 @@ struct LinearOrderCheck {
   int order = 0;
   double nrmse = 0;             // its validation NRMSE
   long nuisance_validation = 0; // nuisance columns it fits on the validation records
+  Eigen::VectorXd y_val;        // its simulation of the validation records
 };
 LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top, GapReport& report);
 // The diagnosis again on check.plant; the verdict becomes unmodelled_dynamics with the static

@@ -424,6 +424,8 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const double y_val_spread = (y_val.array() - y_val.mean()).matrix().norm() / std::sqrt(double(n_val));
 
   const CandidateFit& top = report.ranking.front();
+  for (const CandidateWork& w : work)
+    if (w.fit.effect.kind == top.effect.kind && w.fit.effects.size() <= 1) report.validation_prediction = w.y_val;
   v.effect = EffectName(top.effect.kind);
   v.confidence = top.score;
   AdoptCandidate(top, v);
@@ -507,6 +509,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
       report.notes.push_back(prune_note);
       const CandidateFit& c = single.fit;
       verdict_val_mse = c.validation_mse;
+      report.validation_prediction = single.y_val;
       v.effect = EffectName(c.effect.kind);
       AdoptCandidate(c, v);
       // Its BIC weight among the eligible single candidates (its own kind's first fit replaced).
@@ -518,6 +521,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
       if (!prune_note.empty()) report.notes.push_back(prune_note);
       const CandidateFit& c = best.pair.fit;
       verdict_val_mse = c.validation_mse;
+      report.validation_prediction = best.pair.y_val;
       v.effect = EffectName(c.effects.front().kind);
       AdoptCandidate(c, v);
       if (searched > 1)

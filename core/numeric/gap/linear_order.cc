@@ -156,6 +156,7 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
   check.nuisance_validation = nuisance_validation;
   check.order = order;
   check.nrmse = nrmse;
+  check.y_val = y_hat;
   return check;
 }
 
@@ -196,6 +197,25 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
     report.notes.push_back(line);
     if (!(inner_bic < current_bic - ctx.options->ambiguity_bic)) return false;
   }
+  // The BIC counts every validation sample as independent. Under coloured noise (correlation
+  // time τ) a higher-order part that follows the noise's slow wander gains τ times too much, so
+  // the gain must also hold as a Diebold–Mariano z with a Newey–West standard error (robust to
+  // the autocorrelation of the squared-error differences), at the tests' level.
+  const Eigen::VectorXd& adopted = found && after.validation_prediction.size() == ctx.y_val.size()
+                                       ? after.validation_prediction
+                                       : check.y_val;
+  if (report.validation_prediction.size() == ctx.y_val.size() && adopted.size() == ctx.y_val.size()) {
+    const double z = ValidationGainZ(ctx.y_val, report.validation_prediction, adopted, 0.0);
+    const double z_crit = NormalUpperQuantile(ctx.options->significance);
+    char line[240];
+    std::snprintf(line, sizeof line,
+                  "linear order check: validation gain over the verdict so far z = %.2f (Newey–West; "
+                  "needs > %.2f)%s",
+                  z, z_crit, z > z_crit ? "" : ": not significant, the verdict stays");
+    report.notes.push_back(line);
+    if (!(z > z_crit)) return false;
+  }
+  report.validation_prediction = adopted;
   v.effect = "unmodelled_dynamics";
   v.tied.clear();
   v.confidence = 1.0;
