@@ -169,9 +169,12 @@ double ValidationBic(long n_val, long n_est, double mse, int parameters, long nu
 // How significantly y_c simulates y better than y_ref (Diebold–Mariano): d_k = (y − y_ref)² −
 // (y − y_c)², z = (mean(d) − bias)/se with the Newey–West (Bartlett, lag 4(N/100)^(2/9))
 // standard error; 0 when d is identically zero. `bias`: the gain y_c gets for free from the
-// extra nuisance columns it fits on these records (their count times σ²/N).
+// extra nuisance columns it fits on these records (their count times σ²/N). `automatic_lag`:
+// the lag is at least Andrews' (1991) AR(1) plug-in for the Bartlett kernel,
+// 1.1447 (α N)^(1/3) with α = 4ρ²/((1 − ρ)²(1 + ρ)²) and ρ the lag-1 autocorrelation of d —
+// long enough for noise of a long correlation time, which the fixed lag under-covers.
 double ValidationGainZ(const Eigen::VectorXd& y, const Eigen::VectorXd& y_ref, const Eigen::VectorXd& y_c,
-                       double bias = 0.0);
+                       double bias = 0.0, bool automatic_lag = false);
 // One-sided normal quantile at level `alpha` (z with P(Z > z) = alpha).
 double NormalUpperQuantile(double alpha);
 

@@ -205,12 +205,12 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
                                        ? after.validation_prediction
                                        : check.y_val;
   if (report.validation_prediction.size() == ctx.y_val.size() && adopted.size() == ctx.y_val.size()) {
-    const double z = ValidationGainZ(ctx.y_val, report.validation_prediction, adopted, 0.0);
+    const double z = ValidationGainZ(ctx.y_val, report.validation_prediction, adopted, 0.0, true);
     const double z_crit = NormalUpperQuantile(ctx.options->significance);
     char line[240];
     std::snprintf(line, sizeof line,
-                  "linear order check: validation gain over the verdict so far z = %.2f (Newey–West; "
-                  "needs > %.2f)%s",
+                  "linear order check: validation gain over the verdict so far z = %.2f (Newey–West, "
+                  "automatic lag; needs > %.2f)%s",
                   z, z_crit, z > z_crit ? "" : ": not significant, the verdict stays");
     report.notes.push_back(line);
     if (!(z > z_crit)) return false;

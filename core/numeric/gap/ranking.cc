@@ -27,13 +27,20 @@ double Correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
 }
 
 double ValidationGainZ(const Eigen::VectorXd& y, const Eigen::VectorXd& y_ref, const Eigen::VectorXd& y_c,
-                       double bias) {
+                       double bias, bool automatic_lag) {
   const Eigen::ArrayXd d = (y - y_ref).array().square() - (y - y_c).array().square();
   const long n = d.size();
   if (n < 2) return 0.0;
   const double mean = d.mean();
   const Eigen::ArrayXd dc = d - mean;
-  const long lag = std::min<long>(n - 1, static_cast<long>(std::floor(4 * std::pow(n / 100.0, 2.0 / 9.0))));
+  long lag = static_cast<long>(std::floor(4 * std::pow(n / 100.0, 2.0 / 9.0)));
+  if (automatic_lag) {
+    const double c0 = dc.square().sum();
+    const double rho = c0 > 0 ? std::clamp((dc.head(n - 1) * dc.tail(n - 1)).sum() / c0, -0.99, 0.99) : 0.0;
+    const double alpha = 4 * rho * rho / ((1 - rho) * (1 - rho) * (1 + rho) * (1 + rho));
+    lag = std::max(lag, static_cast<long>(std::ceil(1.1447 * std::cbrt(alpha * n))));
+  }
+  lag = std::min<long>(lag, n - 1);
   double var = dc.square().mean();
   for (long l = 1; l <= lag; ++l)
     var += 2 * (1 - double(l) / (lag + 1)) * (dc.head(n - l) * dc.tail(n - l)).sum() / n;
