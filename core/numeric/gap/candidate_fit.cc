@@ -277,24 +277,16 @@ bool IsOutputMap(EffectKind kind) {
   return kind == EffectKind::kOutputSaturation || kind == EffectKind::kSensorNonlinearity;
 }
 
-// The output maps (saturation, sensor map) in the order given, on z, and their derivative
-// d map/dz (chain rule through several maps).
+// The output maps (OutputMap: saturation, sensor map) in the order given, on z, and their
+// derivative d map/dz (chain rule through several maps).
 void ApplyOutputMaps(const std::vector<Effect>& maps, Eigen::VectorXd& z, Eigen::VectorXd* slope) {
   if (slope) slope->setOnes(z.size());
-  for (const Effect& e : maps) {
-    const auto& p = e.params;
+  for (const Effect& e : maps)
     for (long k = 0; k < z.size(); ++k) {
       double d = 1.0;
-      if (e.kind == EffectKind::kOutputSaturation) {
-        d = z(k) > p[0] && z(k) < p[1] ? 1.0 : 0.0;
-        z(k) = std::clamp(z(k), p[0], p[1]);
-      } else {
-        d = p[3] != 0.0 ? p[0] * (z(k) < 0 ? -1.0 : 1.0) : p[0] + z(k) * (2 * p[1] + 3 * p[2] * z(k));
-        z(k) = SensorMap(z(k), p);
-      }
+      z(k) = OutputMap(e, z(k), slope ? &d : nullptr);
       if (slope) (*slope)(k) *= d;
     }
-  }
 }
 
 }  // namespace

@@ -143,5 +143,9 @@ double DeadZone(double u, double width);
 // Play operator of half-width r over a whole sequence, starting from w = clip(0, u0 ± r).
 Eigen::VectorXd Backlash(const Eigen::VectorXd& u, double half_width);
 double SensorMap(double y, const std::vector<double>& params);  // sensor_nonlinearity
+// An output-side static map (output_saturation or sensor_nonlinearity) at y, and its slope
+// d map/dy there when asked (0 where the saturation clips); y itself, slope 1, for any other
+// effect. The simulator, the bench's rig and the diagnosis's nuisance fit all apply it.
+double OutputMap(const Effect& effect, double y, double* slope = nullptr);
 
 }  // namespace idrig

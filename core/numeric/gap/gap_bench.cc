@@ -288,11 +288,8 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Eff
   EffectSimulationOptions fine;
   fine.substeps = 16;
   Eigen::VectorXd y = SimulateWithEffect(g, feedback, w, sample_time, fine);
-  for (const Effect* e : output_maps) {
-    if (e->kind == EffectKind::kOutputSaturation) y = y.cwiseMax(e->params[0]).cwiseMin(e->params[1]);
-    else
-      for (long k = 0; k < y.size(); ++k) y(k) = SensorMap(y(k), e->params);
-  }
+  for (const Effect* e : output_maps)
+    for (long k = 0; k < y.size(); ++k) y(k) = OutputMap(*e, y(k));
   const double innovation = std::sqrt(1 - noise_pole * noise_pole);
   double e = 0;
   for (long k = 0; k < y.size(); ++k) {
