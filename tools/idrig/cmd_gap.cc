@@ -80,8 +80,11 @@ std::string Rate(int num, int den) {
 
 void RunBench(const BenchSettings& b) {
   BenchCaseTruth(0, b.combos);  // throws std::invalid_argument for a share outside [0, 1]
-  if (!(b.damping.size() == 2 && b.damping[0] <= b.damping[1]))
-    throw std::invalid_argument("gap bench: --damping needs LO,HI with LO <= HI");
+  GapCaseOptions checked;  // thrown here, not from the worker threads
+  checked.zeta_min = b.damping.at(0);
+  checked.zeta_max = b.damping.at(1);
+  checked.noise_pole = b.noise_pole;
+  ValidateGapCaseOptions(checked);
   if (!b.dump.empty()) std::filesystem::create_directories(b.dump);
   std::vector<GapBenchOutcome> outcomes(b.cases);
   std::atomic<int> next{0};

@@ -305,8 +305,17 @@ GapCase MakeGapCase(EffectKind truth, std::mt19937_64& rng, const GapCaseOptions
   return MakeGapCase(std::vector<EffectKind>{truth}, rng, options);
 }
 
+void ValidateGapCaseOptions(const GapCaseOptions& o) {
+  if (!(o.zeta_min > 0 && o.zeta_min <= o.zeta_max))
+    throw std::invalid_argument("gap case: damping range LO,HI = " + std::to_string(o.zeta_min) + "," +
+                                std::to_string(o.zeta_max) + " needs 0 < LO <= HI");
+  if (!(o.noise_pole >= 0 && o.noise_pole < 1))
+    throw std::invalid_argument("gap case: noise pole " + std::to_string(o.noise_pole) + " is not in [0, 1)");
+}
+
 GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
                     const GapCaseOptions& options) {
+  ValidateGapCaseOptions(options);
   if (truths.empty() || truths.size() > 2)
     throw std::invalid_argument("gap case: give one or two effects, not " +
                                 std::to_string(truths.size()));

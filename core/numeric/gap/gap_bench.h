@@ -59,6 +59,9 @@ struct GapCase {
   GapRecord estimation, validation;
 };
 
+// Throws std::invalid_argument naming a damping range that is not 0 < LO <= HI or a noise
+// pole outside [0, 1) (MakeGapCase checks them; a front end may check them up front).
+void ValidateGapCaseOptions(const GapCaseOptions& options);
 GapCase MakeGapCase(EffectKind truth, std::mt19937_64& rng, const GapCaseOptions& options = {});
 // One or two withheld effects (two: each drawn as for a single case, acting together on the rig;
 // parameter_mismatch may not be one of a pair). Throws std::invalid_argument otherwise.

@@ -181,6 +181,18 @@ TEST(GapBenchTest, BadPairsAndSharesAreNamed) {
   EXPECT_THROW(MakeGapCase({EffectKind::kParameterMismatch, EffectKind::kDeadZone}, rng), std::invalid_argument);
   EXPECT_THROW(MakeGapCase(std::vector<EffectKind>{}, rng), std::invalid_argument);
   EXPECT_THROW(BenchCaseTruth(0, 1.5), std::invalid_argument);
+  GapCaseOptions reversed;
+  reversed.zeta_min = 0.5;
+  reversed.zeta_max = 0.1;
+  try {
+    MakeGapCase(EffectKind::kNone, rng, reversed);
+    FAIL() << "a reversed damping range accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("LO <= HI"), std::string::npos) << e.what();
+  }
+  GapCaseOptions unstable_noise;
+  unstable_noise.noise_pole = 1.0;
+  EXPECT_THROW(MakeGapCase(EffectKind::kNone, rng, unstable_noise), std::invalid_argument);
   EXPECT_THROW(ScoreGapBench({GapBenchOutcome{}}), std::invalid_argument);
 }
 
