@@ -74,6 +74,7 @@ static nlohmann::json NoiseFloorJson(const NoiseFloor& f, double nrmse) {
     j["order"] = f.order;
     j["ar_gain"] = f.ar_gain;
   }
+  if (f.drifting_records > 0) j["drifting_records"] = f.drifting_records;
   return j;
 }
 

@@ -274,7 +274,7 @@ void RegisterGapCommand(CLI::App& app) {
   bench->add_option("--jobs", b->jobs, "parallel diagnoses")->check(CLI::Range(1, 64));
   bench->add_flag("--json", b->json, "print the summary as JSON");
   bench->add_option("--dump", b->dump, "also write each case (sim model, records, truth) to this directory");
-  bench->add_option("--excitation", b->excitation, "levels, prbs, rbs, noise (band-limited Gaussian), steps (random staircase) or chirp for every case (default: one of the first three drawn per case)")
+  bench->add_option("--excitation", b->excitation, "levels, prbs, rbs, noise (band-limited Gaussian), steps (random staircase), chirp or multisine (periodic random-phase odd multisine, five periods) for every case (default: one of the first three drawn per case)")
       ->check(CLI::IsMember(BenchExcitations()));
   bench->add_flag("--integrating", b->integrating,
                   "integrating plants only (K/(s(Ts + 1)): position from force, a level from a flow)");

@@ -84,6 +84,28 @@ Eigen::VectorXd Excitation(const std::string& kind, double bandwidth, double amp
     }
     return u;
   }
+  if (kind == "multisine") {
+    // One random-phase odd multisine (every odd line up to f_band, RMS amplitude/2) repeated over
+    // five periods: the periodic test of a frequency-domain lab. The noise floor comes from the
+    // spread across periods and the detection lines are available.
+    const int periods = 5;
+    const int period = n / periods;
+    ExcitationSpec spec;
+    spec.kind = ExcitationKind::kMultisine;
+    spec.base_frequency_hz = fs / period;
+    const int top = std::max(3, static_cast<int>(f_band / spec.base_frequency_hz));
+    spec.lines.clear();
+    for (int k = 1; k <= top; ++k) spec.lines.push_back(k);
+    spec.line_set = MultisineLineSet::kOdd;
+    spec.phase_rule = MultisinePhase::kRandom;
+    spec.scale = MultisineScale::kRms;
+    spec.amplitude = amplitude / 2;
+    spec.seed = seed;
+    const Eigen::VectorXd one = GenerateExcitation(spec, fs, period);
+    Eigen::VectorXd u(n);
+    for (int k = 0; k < n; ++k) u(k) = one(k % period);
+    return u;
+  }
   if (kind == "noise") {
     // Band-limited Gaussian noise: white noise through two first-order low-passes at f_band,
     // scaled so that the peak is about `amplitude` (standard deviation amplitude/3). Not periodic:
@@ -400,7 +422,7 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
 }
 
 const std::vector<std::string>& BenchExcitations() {
-  static const std::vector<std::string> kinds = {"levels", "prbs", "rbs", "noise", "steps", "chirp"};
+  static const std::vector<std::string> kinds = {"levels", "prbs", "rbs", "noise", "steps", "chirp", "multisine"};
   return kinds;
 }
 

@@ -62,10 +62,14 @@ DetectionLines AnalyseDetectionLines(const std::vector<GapRecord>& records, cons
   std::vector<std::complex<double>> fu, fy;
   std::vector<std::complex<double>> u_mean(half + 1, 0.0), y_mean(half + 1, 0.0);
   std::vector<std::vector<std::complex<double>>> y_periods;
+  // A ramp (an integrating plant's integrated offset) leaks into every line as a sawtooth: it is
+  // taken off as the line through the period means.
+  const double drift = PeriodDrift(record->y, p, first);
   for (int j = first; j < p.periods; ++j) {
     for (int k = 0; k < n; ++k) {
-      su[k] = record->u(static_cast<long>(j) * n + k);
-      sy[k] = record->y(static_cast<long>(j) * n + k);
+      const long t = static_cast<long>(j) * n + k;
+      su[k] = record->u(t);
+      sy[k] = record->y(t) - drift * t;
     }
     fft.fwd(fu, su);
     fft.fwd(fy, sy);

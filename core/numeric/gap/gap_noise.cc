@@ -44,13 +44,36 @@ Periodicity FindPeriod(const Eigen::VectorXd& u, int min_period) {
   return p;
 }
 
+Eigen::VectorXd PeriodLevels(const Eigen::VectorXd& y, const Periodicity& p) {
+  Eigen::VectorXd level(p.periods);
+  for (int j = 0; j < p.periods; ++j) level(j) = y.segment(static_cast<long>(j) * p.period, p.period).mean();
+  return level;
+}
+
+double PeriodDrift(const Eigen::VectorXd& y, const Periodicity& p, int first) {
+  const int m = p.periods - first;
+  if (m < 2) return 0;
+  const Eigen::VectorXd level = PeriodLevels(y, p).tail(m);
+  const double j_mean = (m - 1) / 2.0;
+  double sxy = 0, sxx = 0;
+  for (int j = 0; j < m; ++j) {
+    sxy += (j - j_mean) * (level(j) - level.mean());
+    sxx += (j - j_mean) * (j - j_mean);
+  }
+  return sxy / sxx / p.period;
+}
+
 int SteadyPeriodStart(const Eigen::VectorXd& y, const Periodicity& p) {
   if (p.periods < 3) return 0;
+  // Compared without each period's level, so that the ramp of an integrated offset (the same
+  // shift from every period to the next) does not hide the transient.
+  const Eigen::VectorXd level = PeriodLevels(y, p);
   std::vector<double> change(p.periods - 1);
   for (int j = 0; j + 1 < p.periods; ++j) {
     double d = 0;
     for (int k = 0; k < p.period; ++k) {
-      const double step = y(static_cast<long>(j + 1) * p.period + k) - y(static_cast<long>(j) * p.period + k);
+      const double step = y(static_cast<long>(j + 1) * p.period + k) - level(j + 1) -
+                          y(static_cast<long>(j) * p.period + k) + level(j);
       d += step * step;
     }
     change[j] = d;
@@ -90,16 +113,31 @@ NoiseFloor EstimateNoiseFloor(const std::vector<GapRecord>& estimation,
     if (p.period == 0) continue;
     const int first = SteadyPeriodStart(r->y, p);
     const int m = p.periods - first;
+    // Each period's own mean comes off first: an integrating plant turns an actuator offset into
+    // a ramp, which shifts every period by a constant (y_j(k) = m(k) + j·D) without being noise.
+    // That costs m − 1 degrees of freedom and leaves a periodic output untouched.
+    const Eigen::VectorXd level = PeriodLevels(r->y, p);
+    Eigen::VectorXd shape = Eigen::VectorXd::Zero(p.period);  // the mean period without its level
+    for (int j = first; j < p.periods; ++j)
+      shape += (r->y.segment(static_cast<long>(j) * p.period, p.period).array() - level(j)).matrix() / m;
+    // A ramp that moves the output by more than 5 % of the period's own swing moves the state:
+    // a nonlinear rig then answers each period differently, and that difference is not noise.
+    // Such a record is left to the predictor below.
+    const double moved = std::abs(PeriodDrift(r->y, p, first)) * p.period * (m - 1);
+    if (moved > 0.05 * (shape.maxCoeff() - shape.minCoeff())) {
+      ++floor.drifting_records;
+      continue;
+    }
     for (int k = 0; k < p.period; ++k) {
       double mean = 0;
-      for (int j = first; j < p.periods; ++j) mean += r->y(static_cast<long>(j) * p.period + k);
+      for (int j = first; j < p.periods; ++j) mean += r->y(static_cast<long>(j) * p.period + k) - level(j);
       mean /= m;
       for (int j = first; j < p.periods; ++j) {
-        const double d = r->y(static_cast<long>(j) * p.period + k) - mean;
+        const double d = r->y(static_cast<long>(j) * p.period + k) - level(j) - mean;
         ss += d * d;
       }
     }
-    dof += static_cast<long>(p.period) * (m - 1);
+    dof += static_cast<long>(p.period - 1) * (m - 1);
     samples += static_cast<long>(p.period) * m;
     if (floor.period == 0) {
       floor.period = p.period;

@@ -20,14 +20,23 @@ struct Periodicity {
 };
 Periodicity FindPeriod(const Eigen::VectorXd& u, int min_period = 8);
 // The first period of y that no longer holds the transient: leading periods whose difference to
-// the next exceeds 1.5× the median consecutive-period difference are dropped (two are kept).
+// the next (each without its own mean) exceeds 1.5× the median consecutive-period difference are
+// dropped (two are kept).
 int SteadyPeriodStart(const Eigen::VectorXd& y, const Periodicity& p);
+// The mean of y over each full period.
+Eigen::VectorXd PeriodLevels(const Eigen::VectorXd& y, const Periodicity& p);
+// The drift of y per sample: the least-squares slope of the period means from period `first` on,
+// divided by the period. An integrating plant turns an actuator offset into such a ramp.
+double PeriodDrift(const Eigen::VectorXd& y, const Periodicity& p, int first);
 
 // The output noise level, estimated without any candidate of the diagnosis.
 //  - "periods": the input is periodic in at least one record — the sample variance of y across
 //    periods, pooled over the samples of a period and the periodic records (the first period is
-//    dropped as the transient when there are three or more). Exact for any noise colour: what
-//    repeats is the system's response, linear or not; what does not is noise.
+//    dropped as the transient when there are three or more; each period's own mean is removed
+//    first, so that the ramp of an integrated offset is not counted as noise; a record whose
+//    output ramps by more than 5 % of the period's swing is left out, since a nonlinear rig's
+//    periods differ when its state moves). Exact for any noise colour: what repeats is the
+//    system's response, linear or not; what does not is noise.
 //  - "arx_prediction": otherwise — a high-order ARX(n, n+1) predictor with a constant, fitted by
 //    least squares on the estimation records for n = 4, 8, 16, 32, … (≤ N_est/20), its one-step
 //    prediction errors ε taken on the validation records (scored samples), and
@@ -42,6 +51,7 @@ struct NoiseFloor {
   int order = 0;               // arx_prediction: n
   double ar_gain = 1;          // arx_prediction: Σ a_i² of the kept predictor
   long samples = 0;            // samples behind the estimate
+  int drifting_records = 0;    // periodic inputs whose output ramps (not used for "periods")
 };
 // Throws std::invalid_argument when the records are too short for even the lowest order.
 NoiseFloor EstimateNoiseFloor(const std::vector<GapRecord>& estimation,

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <set>
 
+#include "core/numeric/gap/gap_noise.h"
 #include "core/numeric/model/lti_model.h"
 
 namespace idrig {
@@ -77,6 +78,25 @@ TEST(GapBenchTest, DampingRatiosAreDrawnInTheRequestedRange) {
     EXPECT_LE(zeta, 0.1 + 1e-12);
   }
   EXPECT_GT(second_order, 5);
+}
+
+TEST(GapBenchTest, TheMultisineExcitationIsFivePeriodsOfAnOddMultisine) {
+  std::mt19937_64 rng(5);
+  GapCaseOptions options;
+  options.samples = 2000;
+  options.excitation = "multisine";
+  const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
+  const Eigen::VectorXd& u = c.estimation.u;
+  const Periodicity p = FindPeriod(u);
+  EXPECT_EQ(p.period, 400);
+  EXPECT_EQ(p.periods, 5);
+  EXPECT_LT((u.segment(400, 1600) - u.head(1600)).norm(), 1e-9 * u.norm());
+  // Odd lines only: the DFT of one period has no energy on even lines (a half-period shift
+  // flips the sign of the signal).
+  EXPECT_LT((u.segment(0, 200) + u.segment(200, 200)).norm(), 1e-9 * u.head(400).norm());
+  // A different realisation for validation, same period.
+  EXPECT_EQ(FindPeriod(c.validation.u).period, 400);
+  EXPECT_GT((c.validation.u - u).norm(), 0.1 * u.norm());
 }
 
 TEST(GapBenchTest, BacklashWithQuantisationReadsOnALatticeOffsetByTheSensorOffset) {

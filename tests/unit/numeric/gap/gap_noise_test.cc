@@ -59,6 +59,63 @@ TEST(GapNoiseTest, VarianceAcrossPeriodsGivesTheNoiseOfANonlinearRig) {
   EXPECT_NEAR(f.sigma, sigma, 0.05 * sigma);
 }
 
+// An integrating rig (position from force) under a periodic odd multisine with an actuator
+// offset: the output ramps by the integrated offset, so its periods do not repeat although the
+// input's do.
+GapRecord RampingRecord(const Effect& effect, double sigma, uint64_t seed) {
+  TransferFunction plant;  // 4/(s(s + 4))
+  plant.num = Eigen::VectorXd::Constant(1, 4.0);
+  plant.den = Eigen::Vector3d(1.0, 4.0, 0.0);
+  ExcitationSpec spec;
+  spec.kind = ExcitationKind::kMultisine;
+  spec.base_frequency_hz = 100.0 / 800;
+  for (int k = 1; k <= 15; ++k) spec.lines.push_back(k);
+  spec.line_set = MultisineLineSet::kOdd;
+  spec.phase_rule = MultisinePhase::kRandom;
+  spec.scale = MultisineScale::kRms;
+  spec.amplitude = 1;
+  spec.seed = seed;
+  GapRecord r;
+  r.sample_time = 0.01;
+  r.u = GenerateExcitation(spec, 100.0, 800).replicate(5, 1);
+  std::mt19937_64 rng(seed);
+  r.y = SimulateRig(plant, {effect}, r.u, r.sample_time, sigma, rng, /*input_offset=*/0.1,
+                    /*output_offset=*/2.0);
+  return r;
+}
+
+TEST(GapNoiseTest, ARampFromAnIntegratedOffsetIsNotNoiseNorAnEvenNonlinearity) {
+  const double sigma = 0.02;
+  // Linear: the ramp shifts each period by a constant (0.1 × 8 s = 0.8 per period here). Without
+  // it the spread across periods reads ~0.5 (the ramp), and its sawtooth leaks into every line.
+  const GapRecord linear = RampingRecord(Effect{}, sigma, 1);
+  const NoiseFloor f = EstimateNoiseFloor({linear}, {linear});
+  EXPECT_GT(f.drifting_records, 0);
+  EXPECT_GT(f.sigma, 0.95 * sigma);
+  EXPECT_LT(f.sigma, 1.10 * sigma);
+  const DetectionLines d = AnalyseDetectionLines({linear}, nullptr);
+  ASSERT_TRUE(d.available) << d.reason;
+  EXPECT_FALSE(d.even_distortion) << d.even_to_noise_db << " dB";
+  EXPECT_FALSE(d.odd_distortion) << d.odd_to_noise_db << " dB";
+  // An output clip that the ramp walks into answers each period differently: not noise either.
+  GapRecord clipped = RampingRecord(Effect{EffectKind::kOutputSaturation, {-0.5, 2.5}}, sigma, 2);
+  const NoiseFloor g = EstimateNoiseFloor({clipped}, {clipped});
+  EXPECT_EQ(g.method, "arx_prediction");
+  EXPECT_EQ(g.drifting_records, 2);
+  EXPECT_LT(g.sigma, 1.2 * sigma);
+  // A periodic output keeps the periods floor and counts no drift.
+  TransferFunction stable;
+  stable.num = Eigen::VectorXd::Constant(1, 16.0);
+  stable.den = Eigen::Vector3d(1.0, 4.0, 16.0);
+  GapRecord periodic = linear;
+  std::mt19937_64 rng(3);
+  periodic.y = SimulateRig(stable, {Effect{}}, periodic.u, periodic.sample_time, sigma, rng, 0.1, 2.0);
+  const NoiseFloor h = EstimateNoiseFloor({periodic}, {periodic});
+  EXPECT_EQ(h.method, "periods");
+  EXPECT_EQ(h.drifting_records, 0);
+  EXPECT_NEAR(h.sigma, sigma, 0.05 * sigma);
+}
+
 TEST(GapNoiseTest, ArxPredictionBoundsTheNoiseFromAboveAndTightly) {
   // Non-periodic excitations, effects a linear predictor misses: σ̂ ≥ σ (up to its own scatter)
   // and within 10 % of it, whatever the effect.
