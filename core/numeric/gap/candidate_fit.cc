@@ -39,24 +39,12 @@ Eigen::MatrixXd FreeResponse(const TransferFunction& plant, double ts, long n) {
   return f;
 }
 
-// Least squares of r on [1, F] (F = the free response's first rows, zero below them) through
-// the small normal equations, equilibrated and solved by a symmetric eigen-decomposition with a
-// relative cut-off (a minimum-norm solution where the free response's columns are nearly
-// dependent: the fitted values, all that matters here, are then still the projection).
-Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixXd& free_rows,
-                                  long* rank = nullptr) {
-  const long len = r.size(), rows = std::min<long>(len, free_rows.rows()), k = 1 + free_rows.cols();
-  Eigen::MatrixXd gram(k, k);
-  Eigen::VectorXd rhs(k);
-  gram(0, 0) = double(len);
-  rhs(0) = r.sum();
-  if (k > 1) {
-    const auto f = free_rows.topRows(rows);
-    gram.block(1, 1, k - 1, k - 1) = f.transpose() * f;
-    gram.block(0, 1, 1, k - 1) = f.colwise().sum();
-    gram.block(1, 0, k - 1, 1) = gram.block(0, 1, 1, k - 1).transpose();
-    rhs.tail(k - 1) = f.transpose() * r.head(rows);
-  }
+// Least squares through small normal equations, equilibrated (unit diagonal) and solved by a
+// symmetric eigen-decomposition with a relative cut-off (a minimum-norm solution where the
+// columns are nearly dependent: the fitted values, all that matters here, are then still the
+// projection).
+Eigen::VectorXd EquilibratedSolve(const Eigen::MatrixXd& gram, const Eigen::VectorXd& rhs, long* rank = nullptr) {
+  const long k = gram.rows();
   Eigen::VectorXd scale = gram.diagonal().cwiseSqrt();
   for (long i = 0; i < k; ++i) scale(i) = scale(i) > 0 ? 1.0 / scale(i) : 0.0;
   const Eigen::MatrixXd g = scale.asDiagonal() * gram * scale.asDiagonal();
@@ -72,6 +60,24 @@ Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixX
       if (rank) ++*rank;
     }
   return scale.asDiagonal() * z;
+}
+
+// Least squares of r on [1, F] (F = the free response's first rows, zero below them): [b; x0].
+Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixXd& free_rows,
+                                  long* rank = nullptr) {
+  const long len = r.size(), rows = std::min<long>(len, free_rows.rows()), k = 1 + free_rows.cols();
+  Eigen::MatrixXd gram(k, k);
+  Eigen::VectorXd rhs(k);
+  gram(0, 0) = double(len);
+  rhs(0) = r.sum();
+  if (k > 1) {
+    const auto f = free_rows.topRows(rows);
+    gram.block(1, 1, k - 1, k - 1) = f.transpose() * f;
+    gram.block(0, 1, 1, k - 1) = f.colwise().sum();
+    gram.block(1, 0, k - 1, 1) = gram.block(0, 1, 1, k - 1).transpose();
+    rhs.tail(k - 1) = f.transpose() * r.head(rows);
+  }
+  return EquilibratedSolve(gram, rhs, rank);
 }
 
 // The shooting segments of a record's scored samples, as (start, length): one, or every
@@ -321,16 +327,34 @@ namespace {
 // right basin when the simulation from rest has drifted into a clip that the rig's own state
 // never reaches: at x0 = 0 the clipped samples have no slope, and Gauss–Newton could not leave
 // them). Exact for the maps' pieces the samples sit on.
+//
+// `offset_inside` (the maps are clips only): ŷ = clip(z + F·x0 + b), J = diag(clip')·[1, F].
+// The same model — clip(s, lo, hi) + b = clip(s + b, lo + b, hi + b) — with the limits where
+// the samples are, in the measured output's coordinates. With b after the clip, the limits sit
+// in coordinates that the segment's own offset sets, and on an integrating plant that offset and
+// the integrator's level are one direction: a segment's fit could place the clip anywhere, the
+// limits' start (the measured quantiles less one global offset) clipped nothing, and the fit of
+// the limits had no slope to follow.
 Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen::VectorXd& z,
                                           const Eigen::MatrixXd& free, const std::vector<Effect>& maps,
-                                          Eigen::VectorXd* fitted) {
+                                          Eigen::VectorXd* fitted, bool offset_inside) {
   const long len = y.size(), rows = std::min<long>(len, free.rows()), n = free.cols();
   auto evaluate = [&](const Eigen::VectorXd& coef, Eigen::VectorXd& m, Eigen::VectorXd* slope) {
     m = z;
     if (n > 0) m.head(rows) += free.topRows(rows) * coef.tail(n);
+    if (offset_inside) m.array() += coef(0);
     ApplyOutputMaps(maps, m, slope);
-    m.array() += coef(0);
+    if (!offset_inside) m.array() += coef(0);
     return (y - m).squaredNorm();
+  };
+  // One Gauss–Newton step: b after the maps has slope 1; inside them, the maps' slope.
+  auto step = [&](const Eigen::VectorXd& r, const Eigen::VectorXd& slope) {
+    const Eigen::MatrixXd weighted = slope.head(rows).asDiagonal() * free.topRows(rows);
+    if (!offset_inside) return OffsetAndStateFit(r, weighted);
+    Eigen::MatrixXd design = Eigen::MatrixXd::Zero(len, 1 + n);
+    design.col(0) = slope;
+    design.block(0, 1, rows, n) = weighted;
+    return EquilibratedSolve(design.transpose() * design, design.transpose() * r);
   };
   // A fixed number of full steps, each kept only when it lowers the sum of squares: the result
   // is then a smooth function of the candidate's parameters wherever the clipped samples do
@@ -340,8 +364,7 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
     Eigen::VectorXd m, slope;
     best = evaluate(coef, m, &slope);
     for (int it = 0; it < 4 && std::isfinite(best); ++it) {
-      const Eigen::MatrixXd weighted = slope.head(rows).asDiagonal() * free.topRows(rows);
-      const Eigen::VectorXd trial = coef + OffsetAndStateFit(y - m, weighted);
+      const Eigen::VectorXd trial = coef + step(y - m, slope);
       Eigen::VectorXd m_trial, slope_trial;
       const double next = evaluate(trial, m_trial, &slope_trial);
       if (!(next < best)) break;
@@ -350,7 +373,7 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
     return coef;
   };
   Eigen::VectorXd mapped = z;
-  ApplyOutputMaps(maps, mapped, nullptr);
+  if (!offset_inside) ApplyOutputMaps(maps, mapped, nullptr);
   Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(1 + n);
   at_rest(0) = (y - mapped).mean();
   double sse_rest = INFINITY, sse_identity = INFINITY;
@@ -386,12 +409,17 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
     ApplyOutputMaps(maps, head, nullptr);
     y.head(head.size()) = head;
   }
+  // Clips alone take the offset inside them (OffsetAndStateThroughMaps): their limits are in the
+  // measured output's coordinates. A sensor map keeps it after (its fold is at the plant's zero).
+  const bool offset_inside =
+      std::none_of(maps.begin(), maps.end(), [](const Effect& e) { return e.kind != EffectKind::kOutputSaturation; });
   for (size_t j = 0; j < segments.size(); ++j) {
     const auto [start, len] = segments[j];
     Eigen::VectorXd coef;
     if (!maps.empty()) {  // the state inside the maps, the offset after them
       Eigen::VectorXd fitted;
-      coef = OffsetAndStateThroughMaps(record.y.segment(start, len), y.segment(start, len), free, maps, &fitted);
+      coef = OffsetAndStateThroughMaps(record.y.segment(start, len), y.segment(start, len), free, maps, &fitted,
+                                       offset_inside);
       y.segment(start, len) = fitted;
     } else {
       coef = OffsetAndStateFit(record.y.segment(start, len) - y.segment(start, len), free);

@@ -41,7 +41,7 @@ std::vector<std::vector<double>> Starts(EffectKind kind, const Scales& s) {
       return {{0.05 * unit}, {0.3 * unit}, {1.0 * unit}, {-0.05 * unit}};
     }
     case EffectKind::kOutputSaturation:
-      return {{s.y_quantile[0], s.y_quantile[3]}, {s.y_quantile[1], s.y_quantile[2]}};
+      return {{s.y_measured_quantile[0], s.y_measured_quantile[3]}, {s.y_measured_quantile[1], s.y_measured_quantile[2]}};
     case EffectKind::kOutputQuantization:
       return {{0.05}, {0.3}};  // noise before the rounding, as a share of q
     case EffectKind::kSensorNonlinearity:
@@ -57,8 +57,8 @@ std::vector<std::vector<double>> GridStarts(EffectKind kind, const Scales& s) {
     case EffectKind::kInputSaturation:
     case EffectKind::kOutputSaturation: {
       const bool in = kind == EffectKind::kInputSaturation;
-      const double* low = in ? s.u_low : s.y_low;
-      const double* high = in ? s.u_high : s.y_high;
+      const double* low = in ? s.u_low : s.y_measured_low;
+      const double* high = in ? s.u_high : s.y_measured_high;
       const double span = in ? s.u_max : s.y_max;
       // Each side: one of the tails, or beyond the data (that side does not clip).
       std::vector<double> lo(low, low + 6), hi(high, high + 6);

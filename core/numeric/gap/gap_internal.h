@@ -31,6 +31,10 @@ struct Scales {
   // output offset), low side and high side (1 − share).
   static constexpr double kTailShares[6] = {0.001, 0.01, 0.03, 0.07, 0.15, 0.3};
   double u_low[6] = {}, u_high[6] = {}, y_low[6] = {}, y_high[6] = {};
+  // The same for the measured y as it is: an output clip's limits are in those coordinates
+  // (OffsetAndStateThroughMaps; a clip never shares a candidate with a sensor map).
+  double y_measured_quantile[4] = {0, 0, 0, 0};
+  double y_measured_low[6] = {}, y_measured_high[6] = {};
 };
 
 // What a candidate contains: 0–2 effects (kNone / kParameterMismatch carry no parameters), each

@@ -289,7 +289,11 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     scales.u_high[i] = Quantile(all_u, 1 - Scales::kTailShares[i]);
   }
   const double yq[4] = {0.005, 0.02, 0.98, 0.995};
-  for (int i = 0; i < 4; ++i) scales.y_quantile[i] = Quantile(all_y, yq[i]);
+  for (int i = 0; i < 4; ++i) scales.y_measured_quantile[i] = scales.y_quantile[i] = Quantile(all_y, yq[i]);
+  for (int i = 0; i < 6; ++i) {
+    scales.y_measured_low[i] = Quantile(all_y, Scales::kTailShares[i]);
+    scales.y_measured_high[i] = Quantile(all_y, 1 - Scales::kTailShares[i]);
+  }
 
   long n_est = 0, n_val = 0;
   for (const auto& r : estimation) n_est += r.u.size() - r.score_from;
