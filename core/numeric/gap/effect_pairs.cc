@@ -165,8 +165,10 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   return out;
 }
 
-bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWork& single, std::string& note) {
+bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWork& single, std::string& note,
+                   bool* main_second) {
   const GapOptions& options = *ctx.options;
+  *main_second = false;
   if (pair.fit.effects.size() != 2 || pair.spec.kinds.size() != 2) return false;
   for (EffectKind k : pair.spec.kinds)
     if (k == EffectKind::kOutputQuantization) return false;
@@ -193,10 +195,34 @@ bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWo
                 alone[0].fit.eligible ? "" : " (not eligible)", EffectName(pair.spec.kinds[1]),
                 alone[1].fit.bic - pair.fit.bic, alone[1].fit.eligible ? "" : " (not eligible)");
   note = line;
-  if (!best || !(best->fit.bic < pair.fit.bic + options.ambiguity_bic)) return false;
-  single = *best;
-  note += std::string(": ") + EffectName(best->fit.effect.kind) + " alone is as good, the pair is dropped";
-  return true;
+  if (best && best->fit.bic < pair.fit.bic + options.ambiguity_bic) {
+    single = *best;
+    note += std::string(": ") + EffectName(best->fit.effect.kind) + " alone is as good, the pair is dropped";
+    return true;
+  }
+  if (!(alone[1].fit.bic < alone[0].fit.bic)) return false;  // the first is the main effect
+  // The pair came from its lesser effect: the lesser one as a second after the main one, by
+  // the forward search's rules, against the main one as refitted from the pair.
+  const EffectKind main = pair.spec.kinds[1], lesser = pair.spec.kinds[0];
+  const CandidateFit& one = alone[1].fit;
+  const CandidateFit& two = pair.fit;
+  const int dof = std::max(1, two.parameters - one.parameters +
+                                  static_cast<int>(std::max<long>(0, two.nuisance_estimation - one.nuisance_estimation)));
+  const double lr = ctx.n_est * std::log(one.estimation_mse / std::max(two.estimation_mse, 1e-300));
+  const double threshold = ChiSquareQuantile(1 - options.significance / ctx.k_effects, dof);
+  const double signature = Correlation(pair.y_val - alone[1].y_val, ctx.y_val - alone[1].y_val);
+  if (one.eligible && !(lr > threshold && signature >= options.min_signature &&
+                        two.bic < one.bic - options.ambiguity_bic)) {
+    single = alone[1];
+    char why[200];
+    std::snprintf(why, sizeof why, " (LR %.1f, threshold %.1f; signature %.2f)", lr, threshold, signature);
+    note += std::string(": ") + EffectName(main) + " is the main effect, and " + EffectName(lesser) +
+            " does not pass as a second effect after it" + why + "; the pair is dropped";
+    return true;
+  }
+  *main_second = true;
+  note += std::string(": ") + EffectName(main) + " is the main effect, reported first";
+  return false;
 }
 
 }  // namespace idrig::gap_detail

@@ -267,7 +267,14 @@ struct PairSearch {
 // within the ambiguity margin of the pair (validation BIC), the other effect adds nothing the
 // data show — the pair search had found a better basin for it, not a second effect — and
 // `single` holds it (returns true). `note` says what was compared.
-bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWork& single, std::string& note);
+// The main effect of the pair is the one that does better alone (the other costs less when
+// removed). When the pair was reached from its lesser effect, the lesser one must pass the
+// rules of a second effect (significant LR, signature, validation BIC below by the ambiguity
+// margin) against the main one alone as refitted from the pair; if it does not, the pair is
+// dropped for the main effect alone (a route through the lesser effect must not let it past
+// the rules). Otherwise `main_second` is set: report the pair with the main effect first.
+bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWork& single, std::string& note,
+                   bool* main_second);
 // Grid starts of the piecewise effects (limits, dead zone, backlash, friction), whose cost has
 // no gradient where no sample reaches the break: a coarse grid over the tails of u or y (both
 // limits, or one), or over widths; physical units. Empty for the other effects.

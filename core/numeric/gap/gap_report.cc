@@ -509,7 +509,8 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     }
     CandidateWork single;
     std::string prune_note;
-    if (best.kept && PruneToSingle(ctx, best.pair, single, prune_note)) {
+    bool main_second = false;
+    if (best.kept && PruneToSingle(ctx, best.pair, single, prune_note, &main_second)) {
       report.notes.push_back(prune_note);
       const CandidateFit& c = single.fit;
       verdict_val_mse = c.validation_mse;
@@ -523,7 +524,13 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
       v.confidence = 1.0 / total;
     } else if (best.kept) {
       if (!prune_note.empty()) report.notes.push_back(prune_note);
-      const CandidateFit& c = best.pair.fit;
+      CandidateFit c = best.pair.fit;
+      if (main_second) {  // the main effect first (verdict.effect)
+        std::swap(c.effects[0], c.effects[1]);
+        if (c.effects_std.size() == 2) std::swap(c.effects_std[0], c.effects_std[1]);
+        c.effect = c.effects.front();
+        c.param_std = c.effects_std.empty() ? std::vector<double>{} : c.effects_std.front();
+      }
       verdict_val_mse = c.validation_mse;
       report.validation_prediction = best.pair.y_val;
       v.effect = EffectName(c.effects.front().kind);

@@ -409,6 +409,29 @@ TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsNotReported) {
   EXPECT_TRUE(not_searched || dropped) << second << " / " << backward;
 }
 
+TEST(GapPairTest, AnEffectThatFailsAsSecondAfterTheMainOneCannotComeFirstInstead) {
+  // `idrig gap bench --cases 26 --seed 97 --snr 60 --offsets`, case 21: friction under PRBS at
+  // 60 dB. After friction, a sensor map does not pass (its signature is too low); but the
+  // search from the sensor map (third of the first effects) adds friction, and that pair had
+  // the lowest validation BIC, so the verdict was sensor_nonlinearity + friction. The backward
+  // check shows which is the main effect (friction alone 27.8 BIC units above the pair, the
+  // sensor map alone 29902), and the sensor map must pass as a second after it.
+  std::mt19937_64 rng(BenchCaseSeed(97, 21));
+  GapCaseOptions options;
+  options.offsets = true;
+  options.snr_db = 60;
+  const GapCase c = MakeGapCase(EffectKind::kCoulombFriction, rng, options);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const GapVerdict& v = report.verdict;
+  std::string backward;
+  for (const auto& n : report.notes)
+    if (n.find("backward check") != std::string::npos) backward = n;
+  std::printf("friction at 60 dB: verdict %s (%zu effects); %s\n", v.effect.c_str(), v.effects.size(), backward.c_str());
+  EXPECT_EQ(v.effect, "coulomb_friction");
+  EXPECT_EQ(v.effects.size(), 1u);
+  EXPECT_NE(backward.find("does not pass as a second effect after it"), std::string::npos) << backward;
+}
+
 TEST(GapOffsetTest, OfTwoBarelyReachedLimitsTheUnreachedOneIsReleased) {
   // `idrig gap bench --cases 26 --seed 52 --offsets --ts 0.05`, case 18: the lower limit is
   // reached by 0.6 % of the estimation samples, the upper one by none. Both were "few", so
