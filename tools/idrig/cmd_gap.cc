@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -169,7 +170,12 @@ void RunBench(const BenchSettings& b) {
                "two-valued input): top-1 "
             << Rate(s.decidable_single_correct, s.decidable_single_cases) << ", both named "
             << Rate(s.decidable_combo_both, s.decidable_combo_cases) << "\n";
-  std::cout << "median validated shrink (right effect) " << s.median_shrink_correct << "\n"
+  std::cout << "median validated shrink (right effect) ";
+  if (std::isnan(s.median_shrink_correct))
+    std::cout << "n/a (no single-effect case named right)";
+  else
+    std::cout << s.median_shrink_correct;
+  std::cout << "\n"
             << "mean time per diagnosis " << s.mean_seconds << " s\n";
   for (const auto& [kind, counts] : s.by_excitation)
     std::cout << "top-1 on " << kind << " excitation " << Rate(counts.first, counts.second) << "\n";

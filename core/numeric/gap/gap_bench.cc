@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "core/numeric/signal/excitation.h"
@@ -501,7 +502,7 @@ GapBenchScore ScoreGapBench(const std::vector<GapBenchOutcome>& outcomes) {
     }
   }
   std::sort(shrinks.begin(), shrinks.end());
-  s.median_shrink_correct = shrinks.empty() ? 0.0 : shrinks[shrinks.size() / 2];
+  s.median_shrink_correct = shrinks.empty() ? std::numeric_limits<double>::quiet_NaN() : shrinks[shrinks.size() / 2];
   s.top1_accuracy = s.single_cases ? double(s.single_correct) / s.single_cases : 0.0;
   s.false_alarm_rate = s.none_cases ? double(s.false_alarms) / s.none_cases : 0.0;
   s.combo_both_rate = s.combo_cases ? double(s.combo_both) / s.combo_cases : 0.0;

@@ -121,7 +121,7 @@ struct GapBenchScore {
   double top1_accuracy = 0;    // single_correct / single_cases
   double false_alarm_rate = 0; // false_alarms / none_cases
   double combo_both_rate = 0, combo_top1_rate = 0;
-  double median_shrink_correct = 0;  // over single cases with the right verdict (not none)
+  double median_shrink_correct = 0;  // over single cases with the right verdict (not none); NaN: none such
   // The same scores without the cases no data can decide: a two-valued input (prbs, rbs) with
   // an input saturation, dead zone or backlash withheld — any static map of a two-valued signal
   // is affine, i.e. a gain and an offset, which the refitted G0 and the output offset absorb
