@@ -293,6 +293,10 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
 // the ranking (beats_linear).
 struct LinearOrderCheck {
   bool wins = false, beats_linear = false;
+  // It beat every single candidate, but a pair of static effects on G0 came after and is now
+  // the verdict so far: compare with that (AdoptHigherOrder), the part alone included.
+  bool wins_over_singles = false;
+  double bic = 0;               // its validation BIC
   double linear_delta_bic = 0;  // its validation BIC less the best linear candidate's
   TransferFunction plant;
   int order = 0;
@@ -303,7 +307,8 @@ struct LinearOrderCheck {
 LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top, GapReport& report);
 // The diagnosis again on check.plant; the verdict becomes unmodelled_dynamics with the static
 // effect(s) found there (returns true) — when check.wins, or else when that beats the validation
-// BIC of the verdict so far (`top`, or the pair kept after it).
+// BIC of the verdict so far (`top`, or the pair kept after it; with wins_over_singles, the
+// higher-order part alone may beat it too).
 bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, const CandidateFit& top,
                       GapReport& report);
 

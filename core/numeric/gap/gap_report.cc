@@ -468,7 +468,11 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const LinearOrderCheck linear = options.check_linear_order && v.effect != "none" && v.effect != "ambiguous"
                                       ? CheckLinearOrder(ctx, top, report)
                                       : LinearOrderCheck{};
-  bool unmodelled = linear.wins && AdoptHigherOrder(ctx, linear, top, report);
+  // When the higher-order part beats every single candidate, the pair search still runs first:
+  // two static effects on G0 can beat it (friction with a saturation on an integrating plant,
+  // where the part of order n0 + 2 beat friction alone and was adopted before any pair was
+  // tried). The adoption is decided after the pair search.
+  bool unmodelled = false;
   // A second effect, by forward selection (effect_pairs.cc), from the best eligible effect —
   // also when parameter_mismatch tops the ranking: two effects together can leave a linear
   // refit as the best single explanation. Two effects that each explain part of the gap can
@@ -547,9 +551,19 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   // beat that?
   const bool linear_stand_in = std::any_of(v.effects.begin(), v.effects.end(),
                                            [](const Effect& e) { return IsLinearEffect(e.kind); });
-  if (!unmodelled && linear.beats_linear && v.effect != "ambiguous" && !within_floor(verdict_val_mse) &&
-      (v.effects.size() < 2 || linear_stand_in))
+  if (linear.wins) {
+    if (v.effects.size() < 2 || linear_stand_in) {
+      unmodelled = AdoptHigherOrder(ctx, linear, top, report);
+    } else {  // a pair of static effects came after: the higher-order part must beat it
+      LinearOrderCheck against_pair = linear;
+      against_pair.wins = false;
+      against_pair.wins_over_singles = true;
+      unmodelled = AdoptHigherOrder(ctx, against_pair, top, report);
+    }
+  } else if (linear.beats_linear && v.effect != "ambiguous" && !within_floor(verdict_val_mse) &&
+             (v.effects.size() < 2 || linear_stand_in)) {
     unmodelled = AdoptHigherOrder(ctx, linear, top, report);
+  }
   std::vector<GapRecord> all_records = estimation;
   all_records.insert(all_records.end(), validation.begin(), validation.end());
   const OutputLattice lattice = DetectOutputLattice(all_records, ctx.q_step, floor.sigma);

@@ -127,5 +127,31 @@ TEST(GapLinearOrderTest, AdequateLinearPartWithASensorMapIsTheMapNotUnmodelledDy
   EXPECT_EQ(report.verdict.effect, "sensor_nonlinearity");
 }
 
+TEST(GapLinearOrderTest, TwoStaticEffectsOnAnAdequateLinearPartAreNotUnmodelledDynamics) {
+  // `idrig gap bench --cases 14 --seed 46 --offsets --integrating --combos 1 --excitation
+  // levels`, case 8: a dead zone and a cubic spring on an integrating plant whose sim model is
+  // exact. A linear part of order 4 beats every single effect (each explains only part of the
+  // gap), and it was adopted before any pair was tried: unmodelled_dynamics + dead_zone +
+  // cubic_stiffness. The pair search now runs first, and the higher-order part (with what it
+  // leaves) must beat the pair.
+  std::mt19937_64 rng(BenchCaseSeed(46, 8));
+  GapCaseOptions options;
+  options.offsets = true;
+  options.integrating = true;
+  options.excitation = "levels";
+  const std::vector<EffectKind> truth = BenchCaseTruth(8, 1.0);
+  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kDeadZone, EffectKind::kCubicStiffness}));
+  const GapCase c = MakeGapCase(truth, rng, options);
+  GapOptions gap;
+  gap.threads = 1;
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, gap);
+  PrintReport(report);
+  const GapVerdict& v = report.verdict;
+  EXPECT_EQ(v.effect, "dead_zone");
+  ASSERT_EQ(v.effects.size(), 2u);
+  EXPECT_EQ(v.effects[1].kind, EffectKind::kCubicStiffness);
+  EXPECT_EQ(v.linear_order, 0);
+}
+
 }  // namespace
 }  // namespace idrig
