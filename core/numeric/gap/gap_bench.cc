@@ -55,6 +55,23 @@ TransferFunction RandomPlant(EffectKind truth, std::mt19937_64& rng, double* ban
   return tf;
 }
 
+// One period of `samples` of a random-phase odd multisine: every odd line up to f_band (three
+// at least), RMS `rms`.
+Eigen::VectorXd OddMultisine(double fs, int samples, double f_band, double rms, uint64_t seed) {
+  ExcitationSpec spec;
+  spec.kind = ExcitationKind::kMultisine;
+  spec.base_frequency_hz = fs / samples;
+  const int top = std::max(3, static_cast<int>(f_band / spec.base_frequency_hz));
+  spec.lines.clear();
+  for (int k = 1; k <= top; ++k) spec.lines.push_back(k);
+  spec.line_set = MultisineLineSet::kOdd;
+  spec.phase_rule = MultisinePhase::kRandom;
+  spec.scale = MultisineScale::kRms;
+  spec.amplitude = rms;
+  spec.seed = seed;
+  return GenerateExcitation(spec, fs, samples);
+}
+
 Eigen::VectorXd Excitation(const std::string& kind, double bandwidth, double amplitude,
                            const GapCaseOptions& options, uint64_t seed) {
   const double fs = 1.0 / options.sample_time;
@@ -68,18 +85,7 @@ Eigen::VectorXd Excitation(const std::string& kind, double bandwidth, double amp
     const double levels[3] = {0.25, 0.55, 1.0};
     const int step = std::max(10, segment / 6);
     for (int s = 0; s < 3; ++s) {
-      ExcitationSpec spec;
-      spec.kind = ExcitationKind::kMultisine;
-      spec.base_frequency_hz = fs / (segment - step);
-      const int top = std::max(3, static_cast<int>(f_band / spec.base_frequency_hz));
-      spec.lines.clear();
-      for (int k = 1; k <= top; ++k) spec.lines.push_back(k);
-      spec.line_set = MultisineLineSet::kOdd;
-      spec.phase_rule = MultisinePhase::kRandom;
-      spec.scale = MultisineScale::kRms;
-      spec.amplitude = levels[s] * amplitude / 2;
-      spec.seed = seed * 7 + s;
-      const Eigen::VectorXd part = GenerateExcitation(spec, fs, segment - step);
+      const Eigen::VectorXd part = OddMultisine(fs, segment - step, f_band, levels[s] * amplitude / 2, seed * 7 + s);
       u.segment(s * segment, step).setConstant((s % 2 ? -0.6 : 0.6) * amplitude * levels[s]);
       u.segment(s * segment + step, segment - step) = part;
     }
@@ -91,18 +97,7 @@ Eigen::VectorXd Excitation(const std::string& kind, double bandwidth, double amp
     // spread across periods and the detection lines are available.
     const int periods = 5;
     const int period = n / periods;
-    ExcitationSpec spec;
-    spec.kind = ExcitationKind::kMultisine;
-    spec.base_frequency_hz = fs / period;
-    const int top = std::max(3, static_cast<int>(f_band / spec.base_frequency_hz));
-    spec.lines.clear();
-    for (int k = 1; k <= top; ++k) spec.lines.push_back(k);
-    spec.line_set = MultisineLineSet::kOdd;
-    spec.phase_rule = MultisinePhase::kRandom;
-    spec.scale = MultisineScale::kRms;
-    spec.amplitude = amplitude / 2;
-    spec.seed = seed;
-    const Eigen::VectorXd one = GenerateExcitation(spec, fs, period);
+    const Eigen::VectorXd one = OddMultisine(fs, period, f_band, amplitude / 2, seed);
     Eigen::VectorXd u(n);
     for (int k = 0; k < n; ++k) u(k) = one(k % period);
     return u;
