@@ -175,12 +175,26 @@ Effect DrawEffect(EffectKind kind, std::mt19937_64& rng, const SignalStats& st,
   const double slow = 1.0 / st.bandwidth;
   const double u_max = st.u_max, y_max = st.y_max;
   switch (kind) {
-    case EffectKind::kParameterMismatch:
-      for (int i = 1; i < real.den.size(); ++i)
-        real.den(i) *= 1 + (Uniform(rng, 0, 1) < 0.5 ? -1 : 1) * Uniform(rng, 0.1, 0.3);
-      real.num *= 1 + (Uniform(rng, 0, 1) < 0.5 ? -1 : 1) * Uniform(rng, 0.1, 0.3);
+    case EffectKind::kParameterMismatch: {
+      // Every coefficient 10–30 % off, drawn again while the rig would be unstable (a third-order
+      // plant's Hurwitz margin a1·a2 − a3 can go negative, most easily when lightly damped): a
+      // rig that diverges is not a model mismatch. An integrator (a zero last coefficient) stays.
+      const TransferFunction sim = real;
+      auto unstable = [](const TransferFunction& tf) {
+        const Eigen::VectorXcd poles = Poles(tf);
+        for (long i = 0; i < poles.size(); ++i)
+          if (poles(i).real() > 1e-9 * std::max(1.0, std::abs(poles(i)))) return true;
+        return false;
+      };
+      do {
+        real = sim;
+        for (int i = 1; i < real.den.size(); ++i)
+          real.den(i) *= 1 + (Uniform(rng, 0, 1) < 0.5 ? -1 : 1) * Uniform(rng, 0.1, 0.3);
+        real.num *= 1 + (Uniform(rng, 0, 1) < 0.5 ? -1 : 1) * Uniform(rng, 0.1, 0.3);
+      } while (unstable(real));
       e.kind = EffectKind::kNone;
       break;
+    }
     case EffectKind::kTimeDelay:
       e.params = {std::max(2 * st.ts, Uniform(rng, 0.1, 0.4) * slow)};
       break;
