@@ -74,6 +74,12 @@ jq -e '.integrating == true and .sample_time == 0.02 and .excitation == "steps"'
 jq -e '.excitation == "steps" and .real.den[-1] == 0' "$dir/integ/case1-truth.json" > /dev/null \
   || fail "case 1 is not an integrating plant under steps"
 expect "noise" "$idrig" gap bench --cases 1 --excitation sweep
+# The periodic multisine; one case, `none`: no single effect named right, so no median shrink.
+"$idrig" gap bench --cases 1 --seed 4 --samples 600 --excitation multisine --dump "$dir/ms" --json \
+  > "$dir/ms.json" 2>/dev/null || fail "gap bench --excitation multisine exited with $?"
+jq -e '.excitation == "multisine" and .median_shrink_correct == null' "$dir/ms.json" > /dev/null \
+  || fail "bench JSON: multisine not echoed, or a median shrink over no case"
+jq -e '.excitation == "multisine"' "$dir/ms/case0-truth.json" > /dev/null || fail "case 0 is not under the multisine"
 # Lightly damped plants and coloured noise; bad ranges are named.
 "$idrig" gap bench --cases 1 --seed 4 --samples 600 --damping 0.02,0.1 --noise-pole 0.5 --json > "$dir/ld.json" 2>/dev/null \
   || fail "gap bench --damping --noise-pole exited with $?"
