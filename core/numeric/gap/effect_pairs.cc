@@ -34,6 +34,24 @@ bool Compatible(EffectKind a, EffectKind b) {
   return true;
 }
 
+// The second effect's tests, `two` (a pair) against `one` (its first effect alone): the LR on
+// the estimation records (the extra nuisance columns counted as parameters) with its threshold
+// at the Bonferroni-corrected level, and the signature on validation (the pair's change over
+// `one` against what `one` leaves).
+struct SecondEffectTest {
+  double lr = 0, threshold = 0, signature = 0;
+};
+SecondEffectTest TestSecondEffect(const FitContext& ctx, const CandidateWork& one, const CandidateWork& two) {
+  const CandidateFit &a = one.fit, &b = two.fit;
+  const int dof = std::max(1, b.parameters - a.parameters +
+                                  static_cast<int>(std::max<long>(0, b.nuisance_estimation - a.nuisance_estimation)));
+  SecondEffectTest t;
+  t.lr = ctx.n_est * std::log(a.estimation_mse / std::max(b.estimation_mse, 1e-300));
+  t.threshold = ChiSquareQuantile(1 - ctx.options->significance / ctx.k_effects, dof);
+  t.signature = Correlation(two.y_val - one.y_val, ctx.y_val - one.y_val);
+  return t;
+}
+
 }  // namespace
 
 PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
@@ -105,15 +123,14 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
     CandidateFit& c = w.fit;
     if (c.effects.size() < 2) continue;
     CountNuisance(ctx, w);
-    const int dof = std::max(1, c.parameters - one.parameters +
-                                    static_cast<int>(std::max<long>(0, c.nuisance_estimation - one.nuisance_estimation)));
-    c.likelihood_ratio = ctx.n_est * std::log(one.estimation_mse / std::max(c.estimation_mse, 1e-300));
-    c.lr_threshold = ChiSquareQuantile(1 - options.significance / ctx.k_effects, dof);
+    const SecondEffectTest test = TestSecondEffect(ctx, first, w);
+    c.likelihood_ratio = test.lr;
+    c.lr_threshold = test.threshold;
     c.significant = c.likelihood_ratio > c.lr_threshold;
     c.validation_mse = (ctx.y_val - w.y_val).squaredNorm() / ctx.n_val;
     c.nrmse_after = Nrmse(ctx.y_val, w.y_val)(0);
     c.bic = ValidationBic(ctx.n_val, ctx.n_est, c.validation_mse, c.parameters, c.nuisance_validation);
-    c.signature = Correlation(w.y_val - first.y_val, ctx.y_val - first.y_val);
+    c.signature = test.signature;
   }
   MaskOneSidedDeadZone(ctx, pairs, 1);  // a one-sided second limit is a limit (ranking.cc)
   for (CandidateWork& w : pairs) {
@@ -204,18 +221,13 @@ bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWo
   // The pair came from its lesser effect: the lesser one as a second after the main one, by
   // the forward search's rules, against the main one as refitted from the pair.
   const EffectKind main = pair.spec.kinds[1], lesser = pair.spec.kinds[0];
-  const CandidateFit& one = alone[1].fit;
-  const CandidateFit& two = pair.fit;
-  const int dof = std::max(1, two.parameters - one.parameters +
-                                  static_cast<int>(std::max<long>(0, two.nuisance_estimation - one.nuisance_estimation)));
-  const double lr = ctx.n_est * std::log(one.estimation_mse / std::max(two.estimation_mse, 1e-300));
-  const double threshold = ChiSquareQuantile(1 - options.significance / ctx.k_effects, dof);
-  const double signature = Correlation(pair.y_val - alone[1].y_val, ctx.y_val - alone[1].y_val);
-  if (one.eligible && !(lr > threshold && signature >= options.min_signature &&
-                        two.bic < one.bic - options.ambiguity_bic)) {
+  const SecondEffectTest test = TestSecondEffect(ctx, alone[1], pair);
+  if (alone[1].fit.eligible && !(test.lr > test.threshold && test.signature >= options.min_signature &&
+                                 pair.fit.bic < alone[1].fit.bic - options.ambiguity_bic)) {
     single = alone[1];
     char why[200];
-    std::snprintf(why, sizeof why, " (LR %.1f, threshold %.1f; signature %.2f)", lr, threshold, signature);
+    std::snprintf(why, sizeof why, " (LR %.1f, threshold %.1f; signature %.2f)", test.lr, test.threshold,
+                  test.signature);
     note += std::string(": ") + EffectName(main) + " is the main effect, and " + EffectName(lesser) +
             " does not pass as a second effect after it" + why + "; the pair is dropped";
     return true;

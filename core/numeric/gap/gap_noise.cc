@@ -54,10 +54,10 @@ double PeriodDrift(const Eigen::VectorXd& y, const Periodicity& p, int first) {
   const int m = p.periods - first;
   if (m < 2) return 0;
   const Eigen::VectorXd level = PeriodLevels(y, p).tail(m);
-  const double j_mean = (m - 1) / 2.0;
+  const double j_mean = (m - 1) / 2.0, level_mean = level.mean();
   double sxy = 0, sxx = 0;
   for (int j = 0; j < m; ++j) {
-    sxy += (j - j_mean) * (level(j) - level.mean());
+    sxy += (j - j_mean) * (level(j) - level_mean);
     sxx += (j - j_mean) * (j - j_mean);
   }
   return sxy / sxx / p.period;
@@ -128,15 +128,10 @@ NoiseFloor EstimateNoiseFloor(const std::vector<GapRecord>& estimation,
       ++floor.drifting_records;
       continue;
     }
-    for (int k = 0; k < p.period; ++k) {
-      double mean = 0;
-      for (int j = first; j < p.periods; ++j) mean += r->y(static_cast<long>(j) * p.period + k) - level(j);
-      mean /= m;
-      for (int j = first; j < p.periods; ++j) {
-        const double d = r->y(static_cast<long>(j) * p.period + k) - level(j) - mean;
-        ss += d * d;
-      }
-    }
+    for (int j = first; j < p.periods; ++j)
+      ss += (r->y.segment(static_cast<long>(j) * p.period, p.period).array() - level(j) - shape.array())
+                .square()
+                .sum();
     dof += static_cast<long>(p.period - 1) * (m - 1);
     samples += static_cast<long>(p.period) * m;
     if (floor.period == 0) {
