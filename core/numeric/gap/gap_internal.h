@@ -293,9 +293,6 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
 // the ranking (beats_linear).
 struct LinearOrderCheck {
   bool wins = false, beats_linear = false;
-  // It beat every single candidate, but a pair of static effects on G0 came after and is now
-  // the verdict so far: compare with that (AdoptHigherOrder), the part alone included.
-  bool wins_over_singles = false;
   double bic = 0;               // its validation BIC
   double linear_delta_bic = 0;  // its validation BIC less the best linear candidate's
   TransferFunction plant;
@@ -305,12 +302,16 @@ struct LinearOrderCheck {
   Eigen::VectorXd y_val;        // its simulation of the validation records
 };
 LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top, GapReport& report);
+// How AdoptHigherOrder decides: kAdopt — the part beat every single candidate and nothing came
+// after it; kAgainstVerdict — it beat only the linear explanations, so with what the diagnosis
+// finds on it, it must beat the verdict so far (`top`, or the pair kept after it);
+// kAgainstPair — it beat every single candidate, but a pair of static effects on G0 came after:
+// it must beat that pair, with what the diagnosis finds on it or alone.
+enum class HigherOrderMode { kAdopt, kAgainstVerdict, kAgainstPair };
 // The diagnosis again on check.plant; the verdict becomes unmodelled_dynamics with the static
-// effect(s) found there (returns true) — when check.wins, or else when that beats the validation
-// BIC of the verdict so far (`top`, or the pair kept after it; with wins_over_singles, the
-// higher-order part alone may beat it too).
+// effect(s) found there (returns true) when `mode` allows it (above).
 bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, const CandidateFit& top,
-                      GapReport& report);
+                      GapReport& report, HigherOrderMode mode);
 
 // The verdict takes the candidate's effects, their 1σ, plant, validation NRMSE and nuisance.
 void AdoptCandidate(const CandidateFit& c, GapVerdict& v);

@@ -551,19 +551,12 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   // beat that?
   const bool linear_stand_in = std::any_of(v.effects.begin(), v.effects.end(),
                                            [](const Effect& e) { return IsLinearEffect(e.kind); });
-  if (linear.wins) {
-    if (v.effects.size() < 2 || linear_stand_in) {
-      unmodelled = AdoptHigherOrder(ctx, linear, top, report);
-    } else {  // a pair of static effects came after: the higher-order part must beat it
-      LinearOrderCheck against_pair = linear;
-      against_pair.wins = false;
-      against_pair.wins_over_singles = true;
-      unmodelled = AdoptHigherOrder(ctx, against_pair, top, report);
-    }
-  } else if (linear.beats_linear && v.effect != "ambiguous" && !within_floor(verdict_val_mse) &&
-             (v.effects.size() < 2 || linear_stand_in)) {
-    unmodelled = AdoptHigherOrder(ctx, linear, top, report);
-  }
+  const bool static_pair = v.effects.size() >= 2 && !linear_stand_in;
+  if (linear.wins)  // a pair of static effects that came after it must be beaten
+    unmodelled = AdoptHigherOrder(ctx, linear, top, report,
+                                  static_pair ? HigherOrderMode::kAgainstPair : HigherOrderMode::kAdopt);
+  else if (linear.beats_linear && v.effect != "ambiguous" && !within_floor(verdict_val_mse) && !static_pair)
+    unmodelled = AdoptHigherOrder(ctx, linear, top, report, HigherOrderMode::kAgainstVerdict);
   std::vector<GapRecord> all_records = estimation;
   all_records.insert(all_records.end(), validation.begin(), validation.end());
   const OutputLattice lattice = DetectOutputLattice(all_records, ctx.q_step, floor.sigma);

@@ -162,9 +162,10 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
 }
 
 bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, const CandidateFit& top,
-                      GapReport& report) {
+                      GapReport& report, HigherOrderMode mode) {
   GapVerdict& v = report.verdict;
-  const bool compare = !check.wins;
+  const bool compare = mode != HigherOrderMode::kAdopt;
+  const bool against_pair = mode == HigherOrderMode::kAgainstPair;
   // The verdict so far: the top single candidate, or the pair kept after it.
   const double current_bic = compare ? VerdictBic(ctx, v, top.parameters) : 0;
   const std::string current = v.effects.size() > 1 ? v.effect + " + " + EffectName(v.effects[1].kind) : v.effect;
@@ -189,13 +190,13 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
   if (compare) {
     // What the higher-order part is measured against: it lost to `top` (it beats only the
     // linear explanations), or it beat every single but a pair came after.
-    const std::string lost_to = check.wins_over_singles
+    const std::string lost_to = against_pair
                                     ? "every single candidate, and the pair " + current + " was found after"
                                     : std::string("every linear explanation, but not ") + EffectName(top.effect.kind);
     char line[500];
     if (!found) {
       // Nothing static on it: the higher-order part alone, when it beat every single.
-      if (!check.wins_over_singles) return false;
+      if (!against_pair) return false;
       std::snprintf(line, sizeof line,
                     "linear order check: order %d beat %s; alone: validation NRMSE %.4f, ΔBIC %.1f "
                     "against %s (NRMSE %.4f)",
