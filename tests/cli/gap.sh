@@ -86,6 +86,13 @@ jq -e '.excitation == "multisine"' "$dir/ms/case0-truth.json" > /dev/null || fai
 jq -e '.damping == [0.02, 0.1] and .noise_pole == 0.5' "$dir/ld.json" > /dev/null || fail "bench JSON lacks damping/noise_pole"
 expect "LO <= HI" "$idrig" gap bench --cases 1 --damping 0.5,0.1
 expect "noise-pole" "$idrig" gap bench --cases 1 --noise-pole 1.5
+# Plant families; a wrong name, and a family beside --integrating, are named.
+"$idrig" gap bench --cases 1 --seed 4 --samples 600 --plants two-mass --dump "$dir/tm" --json > "$dir/tm.json" 2>/dev/null \
+  || fail "gap bench --plants two-mass exited with $?"
+jq -e '.plants == "two-mass"' "$dir/tm.json" > /dev/null || fail "bench JSON lacks plants"
+jq -e '(.real.den | length) == 5' "$dir/tm/case0-truth.json" > /dev/null || fail "case 0 is not a fourth-order plant"
+expect "plants" "$idrig" gap bench --cases 1 --plants three-mass
+expect "give one" "$idrig" gap bench --cases 1 --plants zeros --integrating
 echo "ok: bench excitations, integrating plants, sample time"
 
 # An odd multisine (lines 1, 3, …, 15 of fs/256), 8 periods, through 5/(s+5) and a sensor with a

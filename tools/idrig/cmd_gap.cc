@@ -1,6 +1,6 @@
 // idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--json]
 // idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--ts S] [--jobs J] [--offsets] [--combos F]
-//                 [--excitation K] [--integrating] [--damping LO,HI] [--noise-pole A] [--dump DIR] [--json]
+//                 [--excitation K] [--integrating] [--plants zeros|two-mass] [--damping LO,HI] [--noise-pole A] [--dump DIR] [--json]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -70,7 +70,7 @@ struct BenchSettings {
   double snr = 30, combos = 0, noise_pole = 0;
   std::vector<double> damping = {0.15, 0.8};
   bool json = false, offsets = false, integrating = false;
-  std::string dump, excitation;
+  std::string dump, excitation, plants;
 };
 
 std::string Rate(int num, int den) {
@@ -85,6 +85,8 @@ void RunBench(const BenchSettings& b) {
   checked.zeta_min = b.damping.at(0);
   checked.zeta_max = b.damping.at(1);
   checked.noise_pole = b.noise_pole;
+  checked.plants = b.plants;
+  checked.integrating = b.integrating;
   ValidateGapCaseOptions(checked);
   if (!b.dump.empty()) std::filesystem::create_directories(b.dump);
   std::vector<GapBenchOutcome> outcomes(b.cases);
@@ -104,6 +106,7 @@ void RunBench(const BenchSettings& b) {
       options.zeta_min = b.damping[0];
       options.zeta_max = b.damping[1];
       options.noise_pole = b.noise_pole;
+      options.plants = b.plants;
       const GapCase c = MakeGapCase(truth, rng, options);
       if (!b.dump.empty()) WriteCase(c, b.dump, i);
       const auto start = std::chrono::steady_clock::now();
@@ -137,7 +140,7 @@ void RunBench(const BenchSettings& b) {
     nlohmann::json out = {{"cases", b.cases}, {"seed", b.seed}, {"snr_db", b.snr}, {"samples", b.samples}, {"sample_time", b.sample_time},
                           {"offsets", b.offsets}, {"combos", b.combos},
                           {"integrating", b.integrating}, {"excitation", b.excitation},
-                          {"damping", b.damping}, {"noise_pole", b.noise_pole},
+                          {"damping", b.damping}, {"noise_pole", b.noise_pole}, {"plants", b.plants},
                           {"single_cases", s.single_cases},
                           {"top1_accuracy", s.top1_accuracy}, {"false_alarm_rate", s.false_alarm_rate},
                           {"single_extra_effect", s.single_extra},
@@ -284,6 +287,11 @@ void RegisterGapCommand(CLI::App& app) {
       ->check(CLI::IsMember(BenchExcitations()));
   bench->add_flag("--integrating", b->integrating,
                   "integrating plants only (K/(s(Ts + 1)): position from force, a level from a flow)");
+  bench->add_option("--plants", b->plants,
+                    "plant family instead of the default (first order, mass-spring-damper, the two in series): "
+                    "zeros (the series plant with a lead or non-minimum-phase zero) or two-mass (fourth order, "
+                    "force on one mass, position of the other)")
+      ->check(CLI::IsMember({"zeros", "two-mass"}));
   bench->add_option("--damping", b->damping,
                     "range LO,HI of the plants' damping ratio (default 0.15,0.8; e.g. 0.02,0.1 for lightly damped rigs)")
       ->expected(2)

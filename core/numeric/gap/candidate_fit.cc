@@ -172,7 +172,10 @@ Effect Candidate::EffectAt(const Eigen::VectorXd& x, size_t i) const {
       break;
     case EffectKind::kActuatorLag: e.params = {Pos(phi(0)) * s.ts}; break;
     case EffectKind::kUnmodelledResonance:
-      e.params = {Pos(phi(0)) / s.ts, std::clamp(Pos(phi(1)), 1e-4, 10.0)};
+      // ζ ≤ 1: an overdamped "resonance" has no peak; it is two real poles, and where the
+      // faster one is beyond the band it is a first-order lag with a spare parameter (a
+      // fourth-order two-mass plant's actuator lag fitted ζ = 9.3 and won by 0.3 % NRMSE).
+      e.params = {Pos(phi(0)) / s.ts, std::clamp(Pos(phi(1)), 1e-4, 1.0)};
       break;
     case EffectKind::kInputSaturation:
     case EffectKind::kOutputSaturation: {

@@ -34,6 +34,41 @@ TransferFunction RandomPlant(EffectKind truth, std::mt19937_64& rng, double* ban
   const double gain = Uniform(rng, 0.5, 2.0);
   const double omega = Uniform(rng, 2.0, 15.0);
   const double zeta = Uniform(rng, options.zeta_min, options.zeta_max);
+  if (options.plants == "zeros") {
+    // ω²·p·(1 ± s/z) / ((s² + 2ζωs + ω²)(s + p)): relative degree 2, so that friction and a
+    // cubic spring still act on a position-like output. A third of them non-minimum phase.
+    const double pole = Uniform(rng, 1.5, 4.0) * omega;
+    const double zero = Uniform(rng, 0.5, 3.0) * omega;
+    const double lead = Uniform(rng, 0, 1) < 1.0 / 3 ? -1.0 : 1.0;
+    TransferFunction tf;
+    tf.num = Eigen::Vector2d(lead / zero, 1.0) * (gain * omega * omega * pole);
+    tf.den = Eigen::Vector4d(1.0, 2 * zeta * omega + pole, omega * omega + 2 * zeta * omega * pole,
+                             omega * omega * pole);
+    *bandwidth = omega;
+    return tf;
+  }
+  if (options.plants == "two-mass") {
+    // Force on mass 1, position of mass 2: K·ω1²ω2² / ((s² + 2ζ1ω1s + ω1²)(s² + 2ζ2ω2s + ω2²)),
+    // the second mode 2–5 times the first; half of them collocated-like, with an antiresonance
+    // (s² + 2ζzωzs + ωz²)·ω2²/ωz² between the two modes (relative degree 2).
+    const double omega2 = Uniform(rng, 2.0, 5.0) * omega;
+    const double zeta2 = Uniform(rng, options.zeta_min, options.zeta_max);
+    const bool antiresonance = Uniform(rng, 0, 1) < 0.5;
+    const double omega_z = Uniform(rng, 1.3, 0.8 * omega2 / omega) * omega;
+    const Eigen::Vector3d m1(1.0, 2 * zeta * omega, omega * omega);
+    const Eigen::Vector3d m2(1.0, 2 * zeta2 * omega2, omega2 * omega2);
+    TransferFunction tf;
+    tf.den = Eigen::VectorXd::Zero(5);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) tf.den(i + j) += m1(i) * m2(j);
+    const double k = gain * omega * omega * omega2 * omega2;
+    if (antiresonance)
+      tf.num = Eigen::Vector3d(1.0, 2 * 0.5 * zeta * omega_z, omega_z * omega_z) * (k / (omega_z * omega_z));
+    else
+      tf.num = Eigen::VectorXd::Constant(1, k);
+    *bandwidth = omega;
+    return tf;
+  }
   int shape = static_cast<int>(Uniform(rng, 0, 3));
   if (IsFeedbackEffect(truth) && shape == 0) shape = 1;
   TransferFunction tf;
@@ -343,6 +378,10 @@ void ValidateGapCaseOptions(const GapCaseOptions& o) {
                                 std::to_string(o.zeta_max) + " needs 0 < LO <= HI");
   if (!(o.noise_pole >= 0 && o.noise_pole < 1))
     throw std::invalid_argument("gap case: noise pole " + std::to_string(o.noise_pole) + " is not in [0, 1)");
+  if (!o.plants.empty() && o.plants != "zeros" && o.plants != "two-mass")
+    throw std::invalid_argument("gap case: plant family '" + o.plants + "' is not one of zeros, two-mass");
+  if (!o.plants.empty() && o.integrating)
+    throw std::invalid_argument("gap case: a plant family and --integrating are two plant choices; give one");
 }
 
 GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,

@@ -43,6 +43,11 @@ struct GapCaseOptions {
   double zeta_min = 0.15, zeta_max = 0.8;
   // Output noise coloured by a first-order pole a in [0, 1) (0: white), of the same variance.
   double noise_pole = 0;
+  // Plant family: empty (first order, mass–spring–damper, or the two in series), "zeros" (the
+  // third-order series plant with a zero: a lead, or non-minimum phase — a drum level, a
+  // flexible arm's tip), or "two-mass" (force on one mass, position of the other through a
+  // spring: a fourth-order plant with a resonance, with or without an antiresonance).
+  std::string plants;
 };
 
 struct GapCase {

@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <set>
+#include <string>
+#include <vector>
 
 #include "core/numeric/gap/gap_noise.h"
 #include "core/numeric/model/lti_model.h"
@@ -235,6 +237,50 @@ TEST(GapBenchTest, BadPairsAndSharesAreNamed) {
   unstable_noise.noise_pole = 1.0;
   EXPECT_THROW(MakeGapCase(EffectKind::kNone, rng, unstable_noise), std::invalid_argument);
   EXPECT_THROW(ScoreGapBench({GapBenchOutcome{}}), std::invalid_argument);
+}
+
+TEST(GapBenchTest, PlantFamiliesHaveTheirZerosAndModes) {
+  // "zeros": a third-order plant with one real zero, a third of them in the right half-plane;
+  // "two-mass": fourth order, two stable complex modes 2–5 times apart, relative degree 2 or 4.
+  int rhp = 0, lhp = 0, antiresonant = 0, plain = 0;
+  for (uint64_t seed = 1; seed <= 60; ++seed) {
+    for (const std::string family : {"zeros", "two-mass"}) {
+      std::mt19937_64 rng(seed);
+      GapCaseOptions options;
+      options.samples = 300;
+      options.plants = family;
+      const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
+      const Eigen::VectorXcd poles = Poles(c.sim);
+      for (long i = 0; i < poles.size(); ++i) EXPECT_LT(poles(i).real(), 0.0) << family << " seed " << seed;
+      if (family == "zeros") {
+        ASSERT_EQ(c.sim.den.size(), 4);
+        ASSERT_EQ(c.sim.num.size(), 2);
+        const double zero = -c.sim.num(1) / c.sim.num(0);
+        (zero > 0 ? rhp : lhp)++;
+        // DC gain positive whatever the zero's side.
+        EXPECT_GT(c.sim.num(1) / c.sim.den(3), 0.0);
+      } else {
+        ASSERT_EQ(c.sim.den.size(), 5);
+        ASSERT_TRUE(c.sim.num.size() == 1 || c.sim.num.size() == 3);
+        (c.sim.num.size() == 3 ? antiresonant : plain)++;
+        std::vector<double> w;
+        for (long i = 0; i < poles.size(); ++i)
+          if (poles(i).imag() > 0) w.push_back(std::abs(poles(i)));
+        ASSERT_EQ(w.size(), 2u) << "seed " << seed;
+        const double ratio = std::max(w[0], w[1]) / std::min(w[0], w[1]);
+        EXPECT_GE(ratio, 2.0 - 1e-9);
+        EXPECT_LE(ratio, 5.0 + 1e-9);
+      }
+    }
+  }
+  EXPECT_GT(rhp, 8);
+  EXPECT_GT(lhp, 25);
+  EXPECT_GT(antiresonant, 15);
+  EXPECT_GT(plain, 15);
+  std::mt19937_64 rng(1);
+  GapCaseOptions bad;
+  bad.plants = "three-mass";
+  EXPECT_THROW(MakeGapCase(EffectKind::kNone, rng, bad), std::invalid_argument);
 }
 
 }  // namespace
