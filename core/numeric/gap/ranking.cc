@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "core/numeric/gap/gap_internal.h"
 #include "core/numeric/validation.h"
@@ -51,6 +52,10 @@ double ValidationGainZ(const Eigen::VectorXd& y, const Eigen::VectorXd& y_ref, c
 double NormalUpperQuantile(double alpha) { return std::sqrt(ChiSquareQuantile(1 - 2 * alpha, 1)); }
 
 double ValidationBic(long n_val, long n_est, double mse, int parameters, long nuisance_val) {
+  // A simulation that diverged on validation (NaN or infinite MSE: a cubic spring that softens
+  // past zero stiffness on an integrating plant) is worst, not unordered: a NaN BIC would break
+  // the ranking's sort and print as "-nan" in the pair notes.
+  if (!(mse < std::numeric_limits<double>::infinity())) return std::numeric_limits<double>::infinity();
   const double unbiased = mse * double(n_val) / double(std::max<long>(1, n_val - nuisance_val));
   return n_val * std::log(std::max(unbiased, 1e-300)) + parameters * std::log(double(n_est));
 }

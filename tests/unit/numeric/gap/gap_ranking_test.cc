@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 
 #include "core/numeric/gap/gap_internal.h"
@@ -51,6 +52,17 @@ TEST(GapValidationGainTest, WhiteDifferencesKeepTheLevelEitherWay) {
   std::printf("rejection at 1 %%, white: fixed lag %.3f, automatic lag %.3f\n", fixed, automatic);
   EXPECT_LT(fixed, 0.035);
   EXPECT_LT(automatic, 0.035);
+}
+
+TEST(GapValidationBicTest, ADivergedSimulationRanksLastInsteadOfBreakingTheOrder) {
+  // The closed form n ln(MSE·n/(n − k)) + p ln n_est for a finite MSE; +∞ for a simulation that
+  // diverged (NaN or ∞), which std::sort can order, where NaN is unordered.
+  const double finite = ValidationBic(100, 200, 0.5, 3, 0);
+  EXPECT_NEAR(finite, 100 * std::log(0.5) + 3 * std::log(200.0), 1e-9);
+  EXPECT_EQ(ValidationBic(100, 200, std::nan(""), 3, 0), std::numeric_limits<double>::infinity());
+  EXPECT_EQ(ValidationBic(100, 200, std::numeric_limits<double>::infinity(), 3, 0),
+            std::numeric_limits<double>::infinity());
+  EXPECT_LT(finite, ValidationBic(100, 200, std::nan(""), 1, 0));
 }
 
 }  // namespace
