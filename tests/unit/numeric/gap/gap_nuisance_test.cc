@@ -481,6 +481,28 @@ TEST(GapOffsetTest, ALimitTheValidationRecordsShowIsNotReleased) {
   EXPECT_LT(limit.nrmse_after, 1.05 * report.verdict.noise_nrmse);
 }
 
+TEST(GapOffsetTest, AKinkPassedByAHairAtASweepsPeakDoesNotMakeADeadZoneTwoSided) {
+  // `idrig gap bench --cases 26 --seed 214 --offsets --plants two-mass --excitation chirp`,
+  // case 5: an upper input limit under a constant-amplitude sweep. The dead zone fitted its flat
+  // part away from zero command with the far kink 0.002 below the sweep's peak, where 1.5 % of
+  // the samples sit: counted as a second side, so the one-sided rule did not apply, and the
+  // dead zone won by one parameter at the same fit. A side must be passed by 2 % of the input's
+  // span to count.
+  std::mt19937_64 rng(BenchCaseSeed(214, 5));
+  GapCaseOptions options;
+  options.offsets = true;
+  options.plants = "two-mass";
+  options.excitation = "chirp";
+  const GapCase c = MakeGapCase(EffectKind::kInputSaturation, rng, options);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const CandidateFit& dead = Ranked(report, EffectKind::kDeadZone);
+  std::printf("limit under a sweep: verdict %s; the dead zone's note: %s\n", report.verdict.effect.c_str(),
+              dead.note.c_str());
+  EXPECT_EQ(report.verdict.effect, "input_saturation");
+  EXPECT_FALSE(dead.eligible);
+  EXPECT_NE(dead.note.find("one-sided"), std::string::npos);
+}
+
 TEST(GapOffsetTest, OfTwoBarelyReachedLimitsTheUnreachedOneIsReleased) {
   // `idrig gap bench --cases 26 --seed 52 --offsets --ts 0.05`, case 18: the lower limit is
   // reached by 0.6 % of the estimation samples, the upper one by none. Both were "few", so
