@@ -61,7 +61,9 @@ TEST_P(OffsetTest, OffsetsAreNuisanceNotAnEffect) {
               v.nrmse_after);
   EXPECT_EQ(v.effect, EffectName(c.truth));
   // One effect withheld, one named: no second effect made of the offsets.
-  if (c.truth != EffectKind::kNone) EXPECT_EQ(v.effects.size(), 1u);
+  if (c.truth != EffectKind::kNone) {
+    EXPECT_EQ(v.effects.size(), 1u);
+  }
   ASSERT_EQ(v.nuisance.output_offset.size(), 1u);
   if (c.truth == EffectKind::kNone) {
     // Offsets only: the nuisance absorbs them (du ≡ dy/G0(0) before a linear stable plant).
@@ -213,13 +215,20 @@ INSTANTIATE_TEST_SUITE_P(
 
 // The bench's integrating plants (K/(s(Ts + 1)), a drifting record from the actuator offset), as
 // `idrig gap bench --integrating --offsets --seed 44` draws them: case `index`.
-GapCase IntegratingBenchCase(EffectKind truth, int index) {
-  std::mt19937_64 rng(BenchCaseSeed(44, index));
+// Case `index` of `idrig gap bench --seed SEED --offsets` with the rest of the options given:
+// an integrating plant, an excitation, a plant family ("" for the default).
+GapCase OffsetBenchCase(uint64_t seed, int index, const std::vector<EffectKind>& truth, bool integrating = false,
+                        const std::string& excitation = "", const std::string& plants = "") {
+  std::mt19937_64 rng(BenchCaseSeed(seed, index));
   GapCaseOptions options;
   options.offsets = true;
-  options.integrating = true;
+  options.integrating = integrating;
+  options.excitation = excitation;
+  options.plants = plants;
   return MakeGapCase(truth, rng, options);
 }
+
+GapCase IntegratingBenchCase(EffectKind truth, int index) { return OffsetBenchCase(44, index, {truth}, true); }
 
 // The diagnosis as the bench runs it (one thread; the result does not depend on it).
 GapReport DiagnoseOnOneThread(const GapCase& c) {
@@ -311,12 +320,7 @@ TEST(GapIntegratingTest, AnOutputClipThatARampWalksIntoIsFittedInTheMeasuredCoor
   // integrator's level were one direction, the limits' starts clipped nothing, the clip's fit
   // stayed at the refit (estimation MSE 1.8 times the noise) and the verdict was
   // sensor_nonlinearity.
-  std::mt19937_64 rng(BenchCaseSeed(95, 10));
-  GapCaseOptions options;
-  options.offsets = true;
-  options.integrating = true;
-  options.excitation = "multisine";
-  const GapCase c = MakeGapCase(EffectKind::kOutputSaturation, rng, options);
+  const GapCase c = OffsetBenchCase(95, 10, {EffectKind::kOutputSaturation}, true, "multisine");
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
   const CandidateFit& clip = Ranked(report, EffectKind::kOutputSaturation);
@@ -351,12 +355,7 @@ TEST(GapIntegratingTest, AnAbsoluteValueSensorFoldsWhereTheSegmentsLevelPutsIt) 
   // fitted 0.147 for a floor of 0.031 — even with the true delay in G0 — and the verdict was
   // unmodelled_resonance + actuator_lag. The third start puts the integrator's level where the
   // fold falls inside the segment.
-  std::mt19937_64 rng(BenchCaseSeed(46, 3));
-  GapCaseOptions options;
-  options.offsets = true;
-  options.integrating = true;
-  options.excitation = "levels";
-  const GapCase c = MakeGapCase(BenchCaseTruth(3, 1.0), rng, options);
+  const GapCase c = OffsetBenchCase(46, 3, BenchCaseTruth(3, 1.0), true, "levels");
   ASSERT_EQ(c.effects.size(), 2u);
   ASSERT_EQ(c.effects[1].kind, EffectKind::kSensorNonlinearity);
   ASSERT_NE(c.effects[1].params.at(3), 0.0);  // the |y| variant
@@ -369,8 +368,11 @@ TEST(GapIntegratingTest, AnAbsoluteValueSensorFoldsWhereTheSegmentsLevelPutsIt) 
               v.effect.c_str(), v.effects.size(), v.nrmse_after, v.noise_nrmse);
   EXPECT_EQ(named, (std::vector<std::string>{"sensor_nonlinearity", "time_delay"}));
   EXPECT_LT(v.nrmse_after, 1.05 * v.noise_nrmse);
-  for (const Effect& e : v.effects)
-    if (e.kind == EffectKind::kTimeDelay) EXPECT_NEAR(e.params[0], c.effects[0].params[0], 0.05 * c.effects[0].params[0]);
+  for (const Effect& e : v.effects) {
+    if (e.kind == EffectKind::kTimeDelay) {
+      EXPECT_NEAR(e.params[0], c.effects[0].params[0], 0.05 * c.effects[0].params[0]);
+    }
+  }
 }
 
 struct ColouredCase {
@@ -469,11 +471,7 @@ TEST(GapPlantFamilyTest, AnActuatorLagOnATwoMassPlantIsNotAnOverdampedResonance)
   // fitted ω = 304 rad/s, ζ = 9.3 — two real poles, the faster one at 5600 rad/s beyond the
   // band, i.e. a lag of 2ζ/ω = 0.061 s with a spare parameter — and won by 0.3 % in NRMSE. A
   // resonance has a peak (ζ ≤ 1/√2); the lag is named.
-  std::mt19937_64 rng(BenchCaseSeed(202, 3));
-  GapCaseOptions options;
-  options.offsets = true;
-  options.plants = "two-mass";
-  const GapCase c = MakeGapCase(EffectKind::kActuatorLag, rng, options);
+  const GapCase c = OffsetBenchCase(202, 3, {EffectKind::kActuatorLag}, false, "", "two-mass");
   ASSERT_EQ(c.sim.den.size(), 5);
   const GapReport report = DiagnoseOnOneThread(c);
   const CandidateFit& resonance = Ranked(report, EffectKind::kUnmodelledResonance);
@@ -491,11 +489,7 @@ TEST(GapOffsetTest, ALimitTheValidationRecordsShowIsNotReleased) {
   // samples reach below the lower limit (and as many of the validation ones); with the lag
   // unmodelled the estimation MSE hardly moved when it was released, and the released fit
   // left the validation NRMSE at 0.045 for a floor of 0.031. Validation keeps it.
-  std::mt19937_64 rng(BenchCaseSeed(204, 18));
-  GapCaseOptions options;
-  options.offsets = true;
-  options.plants = "zeros";
-  const GapCase c = MakeGapCase(BenchCaseTruth(18, 1.0), rng, options);
+  const GapCase c = OffsetBenchCase(204, 18, BenchCaseTruth(18, 1.0), false, "", "zeros");
   ASSERT_EQ(c.effects.size(), 2u);
   ASSERT_EQ(c.effects[1].kind, EffectKind::kInputSaturation);
   const GapReport report = DiagnoseOnOneThread(c);
@@ -519,12 +513,7 @@ TEST(GapOffsetTest, AKinkPassedByAHairAtASweepsPeakDoesNotMakeADeadZoneTwoSided)
   // the samples sit: counted as a second side, so the one-sided rule did not apply, and the
   // dead zone won by one parameter at the same fit. A side must be passed by 2 % of the input's
   // span to count.
-  std::mt19937_64 rng(BenchCaseSeed(214, 5));
-  GapCaseOptions options;
-  options.offsets = true;
-  options.plants = "two-mass";
-  options.excitation = "chirp";
-  const GapCase c = MakeGapCase(EffectKind::kInputSaturation, rng, options);
+  const GapCase c = OffsetBenchCase(214, 5, {EffectKind::kInputSaturation}, false, "chirp", "two-mass");
   const GapReport report = DiagnoseOnOneThread(c);
   const CandidateFit& dead = Ranked(report, EffectKind::kDeadZone);
   std::printf("limit under a sweep: verdict %s; the dead zone's note: %s\n", report.verdict.effect.c_str(),
