@@ -79,15 +79,25 @@ std::string Rate(int num, int den) {
   return s.str();
 }
 
+GapCaseOptions CaseOptions(const BenchSettings& b) {
+  GapCaseOptions options;
+  options.snr_db = b.snr;
+  options.samples = b.samples;
+  options.sample_time = b.sample_time;
+  options.excitation = b.excitation;
+  options.offsets = b.offsets;
+  options.integrating = b.integrating;
+  options.zeta_min = b.damping.at(0);
+  options.zeta_max = b.damping.at(1);
+  options.noise_pole = b.noise_pole;
+  options.plants = b.plants;
+  return options;
+}
+
 void RunBench(const BenchSettings& b) {
   BenchCaseTruth(0, b.combos);  // throws std::invalid_argument for a share outside [0, 1]
-  GapCaseOptions checked;  // thrown here, not from the worker threads
-  checked.zeta_min = b.damping.at(0);
-  checked.zeta_max = b.damping.at(1);
-  checked.noise_pole = b.noise_pole;
-  checked.plants = b.plants;
-  checked.integrating = b.integrating;
-  ValidateGapCaseOptions(checked);
+  const GapCaseOptions case_options = CaseOptions(b);
+  ValidateGapCaseOptions(case_options);  // thrown here, not from the worker threads
   if (!b.dump.empty()) std::filesystem::create_directories(b.dump);
   std::vector<GapBenchOutcome> outcomes(b.cases);
   std::atomic<int> next{0};
@@ -96,18 +106,7 @@ void RunBench(const BenchSettings& b) {
     for (int i = next++; i < b.cases; i = next++) {
       std::mt19937_64 rng(BenchCaseSeed(b.seed, i));
       const std::vector<EffectKind> truth = BenchCaseTruth(i, b.combos);
-      GapCaseOptions options;
-      options.snr_db = b.snr;
-      options.samples = b.samples;
-      options.sample_time = b.sample_time;
-      options.excitation = b.excitation;
-      options.offsets = b.offsets;
-      options.integrating = b.integrating;
-      options.zeta_min = b.damping[0];
-      options.zeta_max = b.damping[1];
-      options.noise_pole = b.noise_pole;
-      options.plants = b.plants;
-      const GapCase c = MakeGapCase(truth, rng, options);
+      const GapCase c = MakeGapCase(truth, rng, case_options);
       if (!b.dump.empty()) WriteCase(c, b.dump, i);
       const auto start = std::chrono::steady_clock::now();
       GapOptions diagnosis;

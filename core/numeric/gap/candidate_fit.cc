@@ -392,9 +392,7 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
   // on one side of zero for the whole segment (the fold unused, a local minimum). A third start
   // from the best c of a grid over the levels that put the fold inside the segment, b by least
   // squares for each.
-  const bool fold = std::any_of(maps.begin(), maps.end(), [](const Effect& e) {
-    return e.kind == EffectKind::kSensorNonlinearity && e.params.size() > 3 && e.params[3] != 0.0;
-  });
+  const bool fold = std::any_of(maps.begin(), maps.end(), IsAbsoluteSensor);
   if (fold && n > 0 && !offset_inside && rows == len) {
     const Eigen::VectorXd ones = Eigen::VectorXd::Ones(len);
     const Eigen::VectorXd v = free.topRows(rows).completeOrthogonalDecomposition().solve(ones);
@@ -716,8 +714,7 @@ static void ReleaseUnreachedLimits(const FitContext& ctx, CandidateWork& w) {
   // records show stays (`--plants zeros --combos 1 --seed 204`, case 18: 0.8 % of either record
   // below it, with an unmodelled lag beside it the estimation MSE hardly moved, and releasing it
   // took the validation NRMSE from 0.031 to 0.045).
-  const auto val_mse = [&](const CandidateWork& c) { return (ctx.y_val - c.y_val).squaredNorm() / ctx.n_val; };
-  if (!(val_mse(trial) <= val_mse(w) * SampleVarianceTolerance(ctx.n_val))) return;
+  if (!(ValidationMse(ctx, trial.y_val) <= ValidationMse(ctx, w.y_val) * SampleVarianceTolerance(ctx.n_val))) return;
   trial.fit.evaluations += w.fit.evaluations;
   trial.fit.note = std::string(free_lo ? "lower" : "upper") + " limit not reached by the estimation records: none assumed";
   w = std::move(trial);

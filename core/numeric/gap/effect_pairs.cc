@@ -127,7 +127,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
     c.likelihood_ratio = test.lr;
     c.lr_threshold = test.threshold;
     c.significant = c.likelihood_ratio > c.lr_threshold;
-    c.validation_mse = (ctx.y_val - w.y_val).squaredNorm() / ctx.n_val;
+    c.validation_mse = ValidationMse(ctx, w.y_val);
     c.nrmse_after = Nrmse(ctx.y_val, w.y_val)(0);
     c.bic = ValidationBic(ctx.n_val, ctx.n_est, c.validation_mse, c.parameters, c.nuisance_validation);
     c.signature = test.signature;

@@ -167,6 +167,10 @@ EffectKind EffectFromName(const std::string& name) {
 
 const std::vector<std::string>& EffectParameterNames(EffectKind kind) { return Entry(kind).params; }
 
+bool IsAbsoluteSensor(const Effect& e) {
+  return e.kind == EffectKind::kSensorNonlinearity && e.params.size() > 3 && e.params[3] != 0.0;
+}
+
 bool IsLinearEffect(EffectKind kind) {
   return kind == EffectKind::kTimeDelay || kind == EffectKind::kActuatorLag ||
          kind == EffectKind::kUnmodelledResonance;

@@ -67,6 +67,9 @@ struct Effect {
   std::vector<double> params;  // EffectParameterNames(kind) order
 };
 
+// The sensor map's |y| variant (absolute = 1): it folds the output at zero.
+bool IsAbsoluteSensor(const Effect& e);
+
 // Throws std::invalid_argument naming the problem (wrong count, NaN, negative width, …).
 void ValidateEffect(const Effect& effect);
 

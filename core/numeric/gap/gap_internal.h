@@ -216,6 +216,11 @@ struct FitContext {
   int k_effects = 1;                            // effects tested (Bonferroni)
 };
 
+// Mean squared simulation error of `y_hat` on the validation records' scored samples.
+inline double ValidationMse(const FitContext& ctx, const Eigen::VectorXd& y_hat) {
+  return (ctx.y_val - y_hat).squaredNorm() / ctx.n_val;
+}
+
 // The spec of a candidate with these effects and the context's nuisance setting.
 CandidateSpec SpecFor(const FitContext& ctx, std::vector<EffectKind> kinds,
                       std::vector<std::vector<double>> fixed = {});

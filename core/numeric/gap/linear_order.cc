@@ -40,9 +40,8 @@ double VerdictBic(const FitContext& ctx, const GapVerdict& v, int first_paramete
   int k = first_parameters;
   if (v.effects.size() > 1) {
     const Effect& second = v.effects[1];
-    const bool absolute =
-        second.kind == EffectKind::kSensorNonlinearity && second.params.size() > 3 && second.params[3] != 0;
-    k += Candidate::NumEffectParams(second.kind, absolute ? std::vector<double>{1.0} : std::vector<double>{});
+    k += Candidate::NumEffectParams(second.kind, IsAbsoluteSensor(second) ? std::vector<double>{1.0}
+                                                                          : std::vector<double>{});
   }
   return ValidationBic(ctx.n_val, ctx.n_est, mse, k, v.nuisance_validation);
 }
@@ -126,7 +125,7 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
   const int dof = std::max(1, cand.Size() - ctx.refit_size + static_cast<int>(extra_nuisance));
   const double lr = ctx.n_est * std::log(ctx.refit_fit.mse / std::max(f.mse, 1e-300));
   const double threshold = ChiSquareQuantile(1 - options.significance / ctx.k_effects, dof);
-  const double validation_mse = (ctx.y_val - y_hat).squaredNorm() / ctx.n_val;
+  const double validation_mse = ValidationMse(ctx, y_hat);
   const double bic = ValidationBic(ctx.n_val, ctx.n_est, validation_mse, cand.Size(), nuisance_validation);
   const double signature = Correlation(y_hat - ctx.y_refit_val, ctx.y_val - ctx.y_refit_val);
   const double nrmse = Nrmse(ctx.y_val, y_hat)(0);

@@ -96,7 +96,7 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
     c.lr_threshold = ChiSquareQuantile(1 - level, dof);
     c.significant = c.likelihood_ratio > c.lr_threshold;
   }
-  c.validation_mse = (y_val - w.y_val).squaredNorm() / n_val;
+  c.validation_mse = ValidationMse(ctx, w.y_val);
   c.nrmse_after = Nrmse(y_val, w.y_val)(0);
   c.bic = ValidationBic(n_val, n_est, c.validation_mse, c.parameters, c.nuisance_validation);
   if (kind == EffectKind::kNone) {
