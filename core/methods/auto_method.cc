@@ -10,7 +10,8 @@
 // cross-validation", Int. J. Control 43(6), 1986; [Ljung] §16.5). The choice is the smallest
 // order whose score is within 2 % of the best; among candidates at that order, the first in the
 // list (oe first: under white output noise it is the maximum-likelihood estimate). The winner
-// is refitted on the whole record and its report returned, with the table of candidates.
+// is refitted on the whole record and its report returned, with the table of candidates; a refit
+// that fails there (an unstable model) is set aside and the rule applied to the candidates left.
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -191,18 +192,50 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
       table.push_back(c);
     }
   }
+  // The winner is refitted on the whole record; a refit that fails (an unstable model: its
+  // simulation diverges) is set aside and the rule is applied again to the candidates left, so
+  // `auto` never returns a failed model while another candidate gives a usable one.
+  std::vector<bool> excluded(table.size(), false);
+  json rejected = json::array();
   double best = -std::numeric_limits<double>::infinity();
-  for (const auto& c : table) best = std::max(best, c.fit);
-  if (!std::isfinite(best)) {
+  const Candidate* chosen = nullptr;
+  MethodReport report;
+  for (int attempt = 0; attempt < 6; ++attempt) {
+    best = -std::numeric_limits<double>::infinity();
+    for (size_t i = 0; i < table.size(); ++i)
+      if (!excluded[i]) best = std::max(best, table[i].fit);
+    if (!std::isfinite(best)) break;
+    const double best_nrmse = 1.0 - best / 100.0;
+    size_t pick = 0;
+    for (size_t i = 0; i < table.size(); ++i)  // ordered by order, then by preference
+      if (!excluded[i] && std::isfinite(table[i].fit) &&
+          1.0 - table[i].fit / 100.0 <= (1.0 + tolerance) * best_nrmse + 1e-12) { pick = i; break; }
+    std::string why;
+    try {
+      MethodReport refit = RunMethod(table[pick].method, full_record, table[pick].options);
+      if (refit.json.value("status", std::string("failed")) != "failed") {
+        chosen = &table[pick];
+        report = std::move(refit);
+        break;
+      }
+      why = refit.json.value("message", std::string("status failed"));
+    } catch (const std::exception& e) {
+      why = e.what();
+    }
+    excluded[pick] = true;
+    json row = json::object();
+    row["candidate"] = table[pick].label;
+    row["order"] = table[pick].order;
+    row["reason"] = "refit on the whole record failed: " + why;
+    rejected.push_back(std::move(row));
+  }
+  if (chosen == nullptr) {
     std::string why;
     for (const auto& c : table) why += "\n  " + c.label + " n=" + std::to_string(c.order) + ": " + c.note;
+    for (const auto& r : rejected) why += "\n  " + r["candidate"].get<std::string>() + " n=" +
+                                          std::to_string(r["order"].get<int>()) + ": " + r["reason"].get<std::string>();
     throw std::invalid_argument("auto: no candidate method gave a usable model on the record:" + why);
   }
-  const double best_nrmse = 1.0 - best / 100.0;
-  const Candidate* chosen = nullptr;
-  for (const auto& c : table)  // ordered by order, then by preference
-    if (std::isfinite(c.fit) && 1.0 - c.fit / 100.0 <= (1.0 + tolerance) * best_nrmse + 1e-12) { chosen = &c; break; }
-  MethodReport report = RunMethod(chosen->method, full_record, chosen->options);
   json selection;
   json rows = json::array();
   for (const auto& c : table)
@@ -233,6 +266,7 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
   selection["chosen"] = {{"candidate", chosen->label}, {"method", chosen->method}, {"options", chosen->options},
                          {"order", chosen->order}, {"validation_fit_percent", chosen->fit}};
   selection["best_validation_fit_percent"] = best;
+  if (!rejected.empty()) selection["rejected"] = rejected;
   report.json["chosen_method"] = chosen->method;
   report.json["selection"] = selection;
   std::ostringstream t;
@@ -253,6 +287,10 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
     }
     t << "\n";
   }
+  for (const auto& r : rejected)
+    t << "set aside: " << r["candidate"].get<std::string>() << " order " << r["order"].get<int>() << " ("
+      << r["reason"].get<std::string>() << ")\n";
+  if (!rejected.empty()) t << "\n";
   t << "\nchosen: " << chosen->label << " order " << chosen->order << " (validation fit " << chosen->fit
     << " %, best " << best << " %); refitted on the whole record:\n\n";
   report.text = t.str() + report.text;

@@ -56,8 +56,8 @@ TEST(SubspacePemMethods, AutoChoosesTheThirdOrderPlantAndSaysWhy) {
 }
 
 // A DaISy record (whitespace-separated columns), the first `nu` columns inputs, means of the
-// first half removed; empty when ../shared/data is absent.
-IoRecord Daisy(const std::string& file, int nu, double ts) {
+// first half removed unless `raw`; empty when ../shared/data is absent.
+IoRecord Daisy(const std::string& file, int nu, double ts, bool raw = false) {
   std::ifstream in(std::string(IDRIG_SHARED_DIR) + "/data/daisy/" + file);
   std::vector<std::vector<double>> rows;
   for (std::string line; std::getline(in, line);) {
@@ -71,7 +71,7 @@ IoRecord Daisy(const std::string& file, int nu, double ts) {
   for (size_t r = 0; r < rows.size(); ++r)
     for (size_t c = 0; c < rows[0].size(); ++c) all(r, c) = rows[r][c];
   const Eigen::RowVectorXd mean = all.topRows(all.rows() / 2).colwise().mean();
-  all.rowwise() -= mean;
+  if (!raw) all.rowwise() -= mean;
   return MakeIoRecord(all.leftCols(nu), all.rightCols(all.cols() - nu), ts);
 }
 
@@ -93,4 +93,29 @@ TEST(SubspacePemMethods, MimoDaisyRecordsGetAFitPerOutput) {
 }
 
 }  // namespace
+// DaISy's dryer (heater voltage → outlet air temperature, Ts = 0.08 s) as recorded, at its
+// operating point (u ≈ 5 V, y ≈ 5, means not removed), first half: the best score
+// on held-out folds goes to n4sid at order 6, whose refit on the whole half has a pole at
+// z = -1.049 (unstable, at the Nyquist frequency) and comes back `failed`. auto used to return that
+// failed model (and `idrig gap diagnose` then refused it); it must set it aside and return a
+// stable model that simulates the second half.
+TEST(SubspacePemMethods, AutoSetsAsideAWinnerWhoseRefitIsUnstable) {
+  const IoRecord dryer = Daisy("dryer.dat", 1, 0.08, /*raw=*/true);
+  if (dryer.NumSamples() == 0) GTEST_SKIP() << "../shared/data/daisy not found";
+  const int half = dryer.NumSamples() / 2;
+  const MethodReport r = RunMethod("auto", Slice(dryer, 0, half), nlohmann::json::object());
+  EXPECT_NE(r.json.at("status"), "failed") << r.json.value("message", "");
+  const LtiModel model = ModelFromJson(r.json.at("model"));
+  EXPECT_LT(Poles(ToStateSpace(model)).cwiseAbs().maxCoeff(), 1.0);
+  const Eigen::MatrixXd sim = Simulate(model, dryer.u, dryer.sample_time);
+  const Eigen::VectorXd fit = FitPercent(dryer.y.bottomRows(dryer.NumSamples() - half),
+                                         sim.bottomRows(dryer.NumSamples() - half));
+  // With the means removed every method simulates the second half at 85.8 % (Octave's n4sid
+  // too: docs/subspace_pem.md); at the operating point a usable model is still above 50 %.
+  EXPECT_GT(fit(0), 50.0);
+  ASSERT_TRUE(r.json.at("selection").contains("rejected"));
+  for (const auto& row : r.json.at("selection").at("rejected"))
+    EXPECT_NE(row.at("reason").get<std::string>().find("unstable"), std::string::npos);
+}
+
 }  // namespace idrig
