@@ -5,6 +5,8 @@
 //  - input–residual cross-correlation (same band; independence of past inputs).
 #include <Eigen/Dense>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace idrig {
 
@@ -37,6 +39,31 @@ struct ResidualTest {
 // N <= max_lag + 1 or the sizes differ.
 ResidualTest TestResiduals(const Eigen::VectorXd& residual, const Eigen::VectorXd& input,
                            const ResidualTestOptions& options = {});
+
+// Is a residual explained by past inputs, whatever the colour of either? The residual's own
+// AR(p) polynomial A (least squares, pooled over the segments) whitens it, e' = A(q)e, and
+// filters the input alike, u' = A(q)u; e' is then regressed on u'(t − k) and a constant, once
+// for the near lags k = 0..d and once for far lags (geometric, ×1.25, from 1.25·d up to a
+// quarter of the shortest segment), each at half the level. Under independence e' is (nearly)
+// white and uncorrelated with every lag whatever u's colour, so N·R² follows χ²(number of
+// lags) (the Lagrange-multiplier form of Ljung's cross-correlation test, [Ljung] §16.6, after
+// Box–Jenkins prewhitening); the plain test above assumes a white residual or a white input
+// and calls coloured noise "correlated" when the input is coloured. Segments (records) are
+// filtered and lagged separately.
+struct InputCorrelationTest {
+  double statistic = 0.0, threshold = 0.0;          // near lags: N·R², χ²_{level}(lags)
+  double far_statistic = 0.0, far_threshold = 0.0;  // far lags (0 when the records are too short)
+  double explained_share = 0.0;                     // R² on the near lags
+  long samples = 0;                                 // rows of the near regression
+  int ar_order = 0, lags = 0, far_lags = 0;         // p, the number of near and far lags
+  long max_lag = 0;                                 // the farthest lag tested
+  bool correlated = false;                          // either statistic above its threshold
+};
+// segments: (residual, input) pairs of equal length. Throws std::invalid_argument when they
+// differ in length or leave fewer than 10 (p + d + 2) rows for the near lags.
+InputCorrelationTest TestInputCorrelationPrewhitened(
+    const std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>>& segments, int ar_order = 10, int dense_lags = 20,
+    double confidence = 0.999);
 
 // Standard normal quantile (inverse CDF), for confidence bands.
 double NormalQuantile(double p);

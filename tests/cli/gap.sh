@@ -95,6 +95,15 @@ expect "plants" "$idrig" gap bench --cases 1 --plants three-mass
 expect "give one" "$idrig" gap bench --cases 1 --plants zeros --integrating
 echo "ok: bench excitations, integrating plants, sample time"
 
+# --only: the cases that withhold the listed effects, each the case at its index in the full
+# sequence (none is index 0, 13, 26, …).
+"$idrig" gap bench --cases 2 --seed 4 --samples 600 --only none --json > "$dir/only.json" 2> "$dir/only.err" \
+  || fail "gap bench --only none exited with $?"
+jq -e '.only == ["none"] and .single_cases == 2' "$dir/only.json" > /dev/null || fail "bench JSON: --only not echoed"
+grep -q "case 13: truth none" "$dir/only.err" || fail "--only none did not keep case 13: $(cat "$dir/only.err")"
+expect "unknown effect 'stiction'" "$idrig" gap bench --cases 1 --only none,stiction
+echo "ok: bench --only"
+
 # An odd multisine (lines 1, 3, …, 15 of fs/256), 8 periods, through 5/(s+5) and a sensor with a
 # y² term: the even detection lines carry the distortion, the odd ones only noise.
 awk 'BEGIN { srand(1); ts = 0.01; n = 256; a = exp(-5 * ts); pi = atan2(0, -1)

@@ -54,7 +54,7 @@ void WriteCase(const GapCase& c, const std::string& dir, int index) {
 // The names in verdict.effects (one or two), or verdict.effect alone.
 std::vector<std::string> NamedEffects(const GapReport& report) {
   const GapVerdict& v = report.verdict;
-  if (v.effect == "none" || v.effect == "ambiguous") return {v.effect};
+  if (v.effect == "none" || v.effect == "ambiguous" || v.effect == "unexplained") return {v.effect};
   std::vector<std::string> names;
   for (const Effect& e : v.effects)
     if (e.kind != EffectKind::kNone) names.push_back(EffectName(e.kind));
@@ -71,6 +71,7 @@ struct BenchSettings {
   std::vector<double> damping = {0.15, 0.8};
   bool json = false, offsets = false, integrating = false;
   std::string dump, excitation, plants;
+  std::vector<std::string> only;  // keep the cases that withhold one of these effects
 };
 
 std::string Rate(int num, int den) {
@@ -98,12 +99,31 @@ void RunBench(const BenchSettings& b) {
   BenchCaseTruth(0, b.combos);  // throws std::invalid_argument for a share outside [0, 1]
   const GapCaseOptions case_options = CaseOptions(b);
   ValidateGapCaseOptions(case_options);  // thrown here, not from the worker threads
+  // The case indices: 0..cases−1, or with --only the first `cases` indices whose truth withholds
+  // a listed effect (each kept case is the same case as at its index in the full sequence).
+  std::vector<int> indices;
+  for (const std::string& name : b.only)
+    EffectFromName(name);  // throws std::invalid_argument naming an unknown effect
+  for (int i = 0; static_cast<int>(indices.size()) < b.cases; ++i) {
+    if (b.only.empty()) {
+      indices.push_back(i);
+      continue;
+    }
+    if (i > 1000 * b.cases)
+      throw std::invalid_argument("gap bench: --only keeps no case of this sequence (with --combos 1 there is no single case)");
+    const std::vector<EffectKind> truth = BenchCaseTruth(i, b.combos);
+    const bool kept = std::any_of(b.only.begin(), b.only.end(), [&](const std::string& name) {
+      return std::any_of(truth.begin(), truth.end(), [&](EffectKind k) { return name == EffectName(k); });
+    });
+    if (kept) indices.push_back(i);
+  }
   if (!b.dump.empty()) std::filesystem::create_directories(b.dump);
   std::vector<GapBenchOutcome> outcomes(b.cases);
   std::atomic<int> next{0};
   std::mutex print;
   auto worker = [&] {
-    for (int i = next++; i < b.cases; i = next++) {
+    for (int slot = next++; slot < b.cases; slot = next++) {
+      const int i = indices[slot];
       std::mt19937_64 rng(BenchCaseSeed(b.seed, i));
       const std::vector<EffectKind> truth = BenchCaseTruth(i, b.combos);
       const GapCase c = MakeGapCase(truth, rng, case_options);
@@ -112,7 +132,7 @@ void RunBench(const BenchSettings& b) {
       GapOptions diagnosis;
       diagnosis.threads = 1;  // the cases run in parallel instead
       const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, diagnosis);
-      GapBenchOutcome& o = outcomes[i];
+      GapBenchOutcome& o = outcomes[slot];
       o.truth = truth;
       o.verdict = report.verdict.effect;
       o.effects = NamedEffects(report);
@@ -139,7 +159,7 @@ void RunBench(const BenchSettings& b) {
     nlohmann::json out = {{"cases", b.cases}, {"seed", b.seed}, {"snr_db", b.snr}, {"samples", b.samples}, {"sample_time", b.sample_time},
                           {"offsets", b.offsets}, {"combos", b.combos},
                           {"integrating", b.integrating}, {"excitation", b.excitation},
-                          {"damping", b.damping}, {"noise_pole", b.noise_pole}, {"plants", b.plants},
+                          {"damping", b.damping}, {"noise_pole", b.noise_pole}, {"plants", b.plants}, {"only", b.only},
                           {"single_cases", s.single_cases},
                           {"top1_accuracy", s.top1_accuracy}, {"false_alarm_rate", s.false_alarm_rate},
                           {"single_extra_effect", s.single_extra},
@@ -274,6 +294,10 @@ void RegisterGapCommand(CLI::App& app) {
   auto* bench = gap->add_subcommand(
       "bench", "blind check: generate cases with withheld effects, diagnose them, score the verdicts");
   bench->add_option("--cases", b->cases, "number of cases (the 13 effects in turn)")->check(CLI::PositiveNumber);
+  bench->add_option("--only", b->only,
+                    "keep only the cases that withhold one of these effects (comma-separated; none for the "
+                    "none cases); each kept case is the one at its index in the full sequence")
+      ->delimiter(',');
   bench->add_option("--seed", b->seed, "seed of the case generator");
   bench->add_option("--snr", b->snr, "output SNR in dB");
   bench->add_option("--samples", b->samples, "samples per record")->check(CLI::Range(200, 10000000));

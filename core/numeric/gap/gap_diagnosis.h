@@ -142,7 +142,9 @@ struct GapVerdict {
   // An effect name, "ambiguous", or "unmodelled_dynamics" (the linear part lacks dynamics: a
   // higher-order linear model beats every single effect — or every linear one, and with the
   // static effect a second diagnosis on it finds, every single effect; `effects` then holds what
-  // that second diagnosis finds, if any).
+  // that second diagnosis finds, if any), or "unexplained" (`none` would have topped the
+  // ranking, but G0's validation residual is above the noise floor and follows the input: a gap
+  // that no effect and no higher-order linear part explains; `effects` empty).
   std::string effect;
   std::vector<std::string> tied; // the two candidates when ambiguous
   double confidence = 0;         // BIC weight of the verdict among all candidates

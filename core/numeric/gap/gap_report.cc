@@ -157,6 +157,38 @@ CandidateWork ReferenceWork(const Candidate& cand, const FitOutcome& fit, const 
   return w;
 }
 
+// Whether the input explains a validation residual (concatenated over the records' scored
+// samples, as Stack makes it): the prewhitened test of validation.h, AR(10), lags 0..20 and
+// geometric beyond, per record, at 99.9 %; its figures go to the notes. Records too short for it say so and count as
+// not explained.
+bool InputExplainsResidual(const std::vector<GapRecord>& validation, const Eigen::VectorXd& residual,
+                           GapReport& report) {
+  std::vector<std::pair<Eigen::VectorXd, Eigen::VectorXd>> segments;
+  long offset = 0;
+  for (const GapRecord& r : validation) {
+    const long n = r.u.size() - r.score_from;
+    segments.emplace_back(residual.segment(offset, n), r.u.tail(n));
+    offset += n;
+  }
+  try {
+    const InputCorrelationTest test = TestInputCorrelationPrewhitened(segments);
+    char line[400];
+    std::snprintf(line, sizeof line,
+                  "G0's validation residual is above the noise floor; input-residual test (prewhitened by "
+                  "its AR(%d)): N·R² = %.1f against %.1f on lags 0..%d, %.1f against %.1f on %d far lags up "
+                  "to %ld (99.9 %% together): %s",
+                  test.ar_order, test.statistic, test.threshold, test.lags - 1, test.far_statistic,
+                  test.far_threshold, test.far_lags, test.max_lag,
+                  test.correlated ? "the residual follows the input, so it is not noise"
+                                  : "not explained by the input (coloured noise)");
+    report.notes.push_back(line);
+    return test.correlated;
+  } catch (const std::invalid_argument& e) {
+    report.notes.push_back(std::string("input-residual test not run: ") + e.what());
+    return false;
+  }
+}
+
 }  // namespace
 
 void gap_detail::AdoptCandidate(const CandidateFit& c, GapVerdict& v) {
@@ -464,10 +496,24 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
           "mismatch; excite at several amplitudes to separate them");
     }
   }
+  // Nothing is left for a second effect (or for more dynamics) when a fit already simulates the
+  // validation records within the independent noise floor (its MSE within two standard
+  // deviations of a χ²_N sample variance, σ²(1 + 2√(2/N))).
+  const bool floor_known = floor.method != "best_candidate_residual";
+  const double floor_mse = floor.sigma * floor.sigma * SampleVarianceTolerance(n_val);
+  auto within_floor = [&](double mse) { return floor_known && mse <= floor_mse; };
+  // `none` on top says G0 fits within the noise. That holds only when what G0 leaves on the
+  // validation records is noise: within the floor, or not explained by past inputs (coloured
+  // noise, which the ARX floor reads low, is not). A residual above the floor and correlated with
+  // the input (the prewhitened test, validation.h) is a gap that no candidate explains: the
+  // linear order is checked, and if nothing explains it either the verdict is `unexplained`.
+  const bool gap_unexplained = v.effect == "none" && floor_known && !within_floor(top.validation_mse) &&
+                               InputExplainsResidual(validation, ctx.y_val - report.validation_prediction, report);
   // The linear part itself, and the diagnosis again on the fixed linear part (linear_order.cc).
-  const LinearOrderCheck linear = options.check_linear_order && v.effect != "none" && v.effect != "ambiguous"
-                                      ? CheckLinearOrder(ctx, top, report)
-                                      : LinearOrderCheck{};
+  const LinearOrderCheck linear =
+      options.check_linear_order && v.effect != "ambiguous" && (v.effect != "none" || gap_unexplained)
+          ? CheckLinearOrder(ctx, top, report)
+          : LinearOrderCheck{};
   // When the higher-order part beats every single candidate, the pair search still runs first:
   // two static effects on G0 can beat it (friction with a saturation on an integrating plant,
   // where the part of order n0 + 2 beat friction alone and was adopted before any pair was
@@ -480,12 +526,6 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   // saturation), so while the best pair so far still leaves the validation records above the
   // independent noise floor, the search goes on from the next eligible effect (up to three
   // firsts); the pair with the lowest validation BIC is kept.
-  // Nothing is left for a second effect (or for more dynamics) when a fit already simulates the
-  // validation records within the independent noise floor (its MSE within two standard
-  // deviations of a χ²_N sample variance, σ²(1 + 2√(2/N))).
-  const bool floor_known = floor.method != "best_candidate_residual";
-  const double floor_mse = floor.sigma * floor.sigma * SampleVarianceTolerance(n_val);
-  auto within_floor = [&](double mse) { return floor_known && mse <= floor_mse; };
   double verdict_val_mse = top.validation_mse;
   if (!unmodelled && v.effect != "ambiguous" && top.effect.kind != EffectKind::kNone &&
       options.second_effect) {
@@ -562,7 +602,17 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const OutputLattice lattice = DetectOutputLattice(all_records, ctx.q_step, floor.sigma);
   NameLatticeQuantisation(lattice, noise_nrmse, report);
   ApplyNoiseFloor(noise_nrmse, v);  // after the second effect: nrmse_after is final
-  if (v.effect == "none")
+  if (v.effect == "none" && gap_unexplained) {
+    v.effect = "unexplained";
+    v.confidence = 0.0;
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "the gap is beyond the noise (validation NRMSE %.4g, floor %.4g) and follows the input, but "
+                  "no effect of the library and no linear part of order %d explains it: a missing input, an "
+                  "effect outside the library, or a sim model of another structure",
+                  v.nrmse_after, noise_nrmse, g0.Order() + 2);
+    v.explanation = line;
+  } else if (v.effect == "none")
     v.explanation = "no candidate explains the gap better than noise: G0 fits within the noise";
   else if (v.effect == "unmodelled_dynamics")
     v.explanation = "the linear part lacks dynamics: a linear model of order " +

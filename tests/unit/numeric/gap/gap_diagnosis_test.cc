@@ -255,5 +255,25 @@ TEST(DiagnoseSignalTest, SeparatesADeadZoneThatABinaryInputCannot) {
   EXPECT_NEAR(report.verdict.params.params[0], c.effect.params[0], 0.1 * c.effect.params[0]);
 }
 
+// A gap outside the library: the rig answers twice, its response echoed 3 s later at 30 % (a
+// reflection, a second load path). No effect and no linear part of order n0 + 2 reproduces a
+// 3 s echo, the residual that G0 leaves follows the input, and the verdict must not be `none`
+// ("G0 fits within the noise"): it is `unexplained`, with the gap left as it was.
+TEST(GapDiagnosisTest, AnEchoNoEffectExplainsIsUnexplainedNotNone) {
+  GapCase c = Case(EffectKind::kNone, 11);
+  const long echo = static_cast<long>(std::lround(3.0 / c.estimation.sample_time));
+  for (GapRecord* r : {&c.estimation, &c.validation}) {
+    const Eigen::VectorXd y = r->y;
+    for (long t = echo; t < y.size(); ++t) r->y(t) += 0.3 * y(t - echo);
+  }
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation});
+  const GapVerdict& v = report.verdict;
+  EXPECT_EQ(v.effect, "unexplained") << v.explanation;
+  EXPECT_TRUE(v.effects.empty());
+  EXPECT_GT(v.nrmse_after, 3 * v.noise_nrmse);
+  EXPECT_DOUBLE_EQ(v.shrink, 0.0);
+  EXPECT_NE(v.explanation.find("follows the input"), std::string::npos) << v.explanation;
+}
+
 }  // namespace
 }  // namespace idrig
