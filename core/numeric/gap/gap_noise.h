@@ -123,9 +123,10 @@ void NameLatticeQuantisation(const OutputLattice& lattice, double noise_nrmse, G
 
 struct GapVerdict;
 // The verdict's figures against an independent floor (all NRMSE on the validation records):
-// shrink = (before − after)/(before − floor) (0 when before ≤ floor: nothing to explain),
-// remaining_gap_to_noise = after − floor, below_noise_floor = after < floor (then shrink may
-// exceed 1: the floor is an upper bound that the model beat, or the noise is coloured).
+// shrink = (before − after)/(before − min(floor, after)) (0 when before ≤ floor: nothing to
+// explain; 1 when after < floor < before: the floor is an upper bound that the model beat, or
+// the noise is coloured, and then at least before − after was explainable),
+// remaining_gap_to_noise = after − floor (negative below the floor), below_noise_floor = after < floor.
 void ApplyNoiseFloor(double floor_nrmse, GapVerdict& verdict);
 
 }  // namespace idrig
