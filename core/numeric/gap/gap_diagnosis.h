@@ -54,6 +54,11 @@ struct GapOptions {
   int threads = 0;               // candidates fitted in parallel; 0: one per hardware thread
   bool second_effect = true;     // forward selection of a second effect after the first
   bool check_linear_order = true;  // test a higher-order linear part (unmodelled_dynamics)
+  // The fit scheme, when it must not be chosen from G0: samples per shooting segment (0: single
+  // shooting) and whether G0 integrates. The diagnosis on a higher-order linear part keeps the
+  // scheme of the diagnosis that found it, so that their NRMSEs and BICs compare.
+  long fixed_segment = -1;       // -1: chosen from G0 (ChooseFitScheme)
+  bool fixed_integrating = false;
 };
 
 struct BandGap {

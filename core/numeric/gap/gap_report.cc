@@ -345,6 +345,10 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   ctx.n_val = n_val;
   ctx.y_val = y_val;
   ChooseFitScheme(g0, estimation, ts, ctx);
+  if (options.fixed_segment >= 0) {
+    ctx.nuisance.segment = options.fixed_segment;
+    ctx.integrating = options.fixed_integrating;
+  }
   GapVerdict& v = report.verdict;
   v.fit_scheme = ctx.nuisance.segment > 0 ? "multiple_shooting" : "single_shooting";
   v.shooting_segment = ctx.nuisance.segment;

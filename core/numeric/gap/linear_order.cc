@@ -170,6 +170,10 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
   const std::string current = v.effects.size() > 1 ? v.effect + " + " + EffectName(v.effects[1].kind) : v.effect;
   GapOptions inner_options = *ctx.options;
   inner_options.check_linear_order = false;
+  // The same fit scheme as here (the part of order n0 + 2 may decay faster than G0, and would get
+  // single shooting): its NRMSEs and BICs are compared with this diagnosis's.
+  inner_options.fixed_segment = ctx.nuisance.segment;
+  inner_options.fixed_integrating = ctx.integrating;
   GapReport after;
   try {
     after = DiagnoseGap(check.plant, *ctx.estimation, *ctx.validation, inner_options);
@@ -183,7 +187,8 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
   // saturation on an integrating plant came out unmodelled_dynamics + actuator_lag +
   // unmodelled_resonance).
   const bool found = !a.effects.empty() && a.effect != "ambiguous" && a.effect != "parameter_mismatch" &&
-                     a.effect != "none" && !after.ranking.empty() &&
+                     a.effect != "none" && a.effect != "unexplained" && !after.ranking.empty() &&
+                     a.nrmse_after < check.nrmse &&  // the effect on it must improve on the part alone
                      std::none_of(a.effects.begin(), a.effects.end(),
                                   [](const Effect& e) { return IsLinearEffect(e.kind); });
   if (compare) {

@@ -153,5 +153,31 @@ TEST(GapLinearOrderTest, TwoStaticEffectsOnAnAdequateLinearPartAreNotUnmodelledD
   EXPECT_EQ(v.linear_order, 0);
 }
 
+TEST(GapLinearOrderTest, AFixedFitSchemeIsKeptSoThatTheInnerDiagnosisComparesWithTheOuter) {
+  // The diagnosis on a higher-order part runs with the outer fit scheme (linear_order.cc): the
+  // option that carries it must override the scheme chosen from G0. An integrating plant gets
+  // multiple shooting from G0; told single shooting, or another segment, it uses that.
+  std::mt19937_64 rng(BenchCaseSeed(46, 0));
+  GapCaseOptions options;
+  options.samples = 1200;
+  options.integrating = true;
+  const GapCase c = MakeGapCase({EffectKind::kNone}, rng, options);
+  GapOptions gap;
+  gap.threads = 1;
+  gap.candidates = {EffectKind::kNone, EffectKind::kParameterMismatch};
+  gap.check_linear_order = false;
+  gap.second_effect = false;
+  const GapReport chosen = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, gap);
+  EXPECT_EQ(chosen.verdict.fit_scheme, "multiple_shooting");
+  gap.fixed_segment = 0;
+  gap.fixed_integrating = true;
+  EXPECT_EQ(DiagnoseGap(c.sim, {c.estimation}, {c.validation}, gap).verdict.fit_scheme, "single_shooting");
+  gap.fixed_segment = 450;
+  const GapReport fixed = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, gap);
+  EXPECT_EQ(fixed.verdict.fit_scheme, "multiple_shooting");
+  EXPECT_EQ(fixed.verdict.shooting_segment, 450);
+  EXPECT_NE(chosen.verdict.shooting_segment, 450);
+}
+
 }  // namespace
 }  // namespace idrig
