@@ -132,7 +132,7 @@ LtiModel ModelFromJson(const json& j) {
   throw std::invalid_argument("model JSON: \"kind\" must be \"tf\" or \"ss\", got \"" + kind + "\"");
 }
 
-LtiModel ReadModelFile(const std::string& path) {
+json ReadModelJsonFile(const std::string& path) {
   std::ifstream file(path);
   if (!file) throw std::invalid_argument(path + ": cannot open the model file");
   json j;
@@ -142,16 +142,55 @@ LtiModel ReadModelFile(const std::string& path) {
     throw std::invalid_argument(path + ": not valid JSON (" + std::string(e.what()) + ")");
   }
   try {
-    return ModelFromJson(j);
+    ModelFromJson(j);
+    OperatingPointFromModelJson(j);
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument(path + ": " + e.what());
   }
+  return j;
 }
+
+LtiModel ReadModelFile(const std::string& path) { return ModelFromJson(ReadModelJsonFile(path)); }
 
 void WriteModelFile(const LtiModel& model, const std::string& path) {
   std::ofstream file(path);
   if (!file) throw std::runtime_error(path + ": cannot open for writing");
   file << ModelToJson(model).dump(2) << "\n";
+}
+
+json OperatingPointToJson(const OperatingPoint& op) {
+  return {{"u", VectorToJson(op.u)}, {"y", VectorToJson(op.y)}};
+}
+
+OperatingPoint OperatingPointFromModelJson(const json& model) {
+  OperatingPoint op;
+  if (!model.is_object() || !model.contains("operating_point")) return op;
+  const json& j = model["operating_point"];
+  if (!j.is_object() || !j.contains("u") || !j.contains("y"))
+    throw std::invalid_argument("model JSON: \"operating_point\" must be an object {\"u\":[…],\"y\":[…]}");
+  op.u = JsonToVector(j["u"], "operating_point.u");
+  op.y = JsonToVector(j["y"], "operating_point.y");
+  const StateSpace ss = ToStateSpace(ModelFromJson(model));
+  if (op.u.size() != ss.NumInputs() || op.y.size() != ss.NumOutputs())
+    throw std::invalid_argument("model JSON: \"operating_point\" has " + std::to_string(op.u.size()) +
+                                " input and " + std::to_string(op.y.size()) + " output values for a model with " +
+                                std::to_string(ss.NumInputs()) + " inputs and " + std::to_string(ss.NumOutputs()) +
+                                " outputs");
+  return op;
+}
+
+Eigen::MatrixXd SimulateModelJson(const json& model, const Eigen::MatrixXd& u, double sample_time) {
+  const LtiModel m = ModelFromJson(model);
+  const OperatingPoint op = OperatingPointFromModelJson(model);
+  if (op.empty()) return Simulate(m, u, sample_time);
+  if (u.cols() != op.u.size())
+    throw std::invalid_argument("simulation: " + std::to_string(u.cols()) + " input columns for a model with " +
+                                std::to_string(op.u.size()) + " inputs");
+  Eigen::MatrixXd du = u;
+  du.rowwise() -= op.u.transpose();
+  Eigen::MatrixXd y = Simulate(m, du, sample_time);
+  y.rowwise() += op.y.transpose();
+  return y;
 }
 
 }  // namespace idrig

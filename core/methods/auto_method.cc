@@ -12,6 +12,9 @@
 // list (oe first: under white output noise it is the maximum-likelihood estimate). The winner
 // is refitted on the whole record and its report returned, with the table of candidates; a refit
 // that fails there (an unstable model) is set aside and the rule applied to the candidates left.
+// A record run about an operating point (its means stand out: auto_method.h) has every candidate
+// also fitted about the means of its estimation part ("oe mean", …: y = y0 + G(u − u0)), scored
+// the same way; at equal order the plain fit comes first.
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -44,6 +47,17 @@ struct Candidate {
 };
 
 }  // namespace
+
+bool OffsetsStandOut(const IoRecord& record) {
+  auto stands_out = [](const Eigen::MatrixXd& m) {
+    for (int j = 0; j < m.cols(); ++j) {
+      const double range = m.col(j).maxCoeff() - m.col(j).minCoeff();
+      if (std::abs(m.col(j).mean()) > kOffsetShare * range) return true;
+    }
+    return false;
+  };
+  return stands_out(record.u) || stands_out(record.y);
+}
 
 int InputEnergySplit(const Eigen::MatrixXd& u, double fraction, int min_head, int min_tail) {
   const int samples = static_cast<int>(u.rows());
@@ -88,7 +102,7 @@ std::vector<int> AutoFoldSplits(const Eigen::MatrixXd& u, bool by_energy) {
 namespace {
 
 MethodReport RunAuto(const MethodInput& input, const json& o) {
-  CheckOptionKeys(o, {"order", "max_order", "candidates", "tolerance", "screen_samples", "split"}, "auto");
+  CheckOptionKeys(o, {"order", "max_order", "candidates", "tolerance", "screen_samples", "split", "offsets"}, "auto");
   const IoRecord& full_record = *input.record;
   // Long records are screened on their first `screen_samples` samples (the same folds in that
   // window); the winner is refitted on the whole record.
@@ -117,6 +131,21 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
       if (!m.is_string()) throw std::invalid_argument("auto: option 'candidates' must list method names");
       FindMethod(m.get<std::string>());
       variants.push_back({m.get<std::string>(), m.get<std::string>(), json::object()});
+    }
+  }
+  // Operating-point offsets: with offsets=auto (the default) a record whose means stand out
+  // (OffsetsStandOut) is also fitted about its means (registry.h, option offsets=mean), every
+  // candidate both ways, and the folds choose; a record about zero is taken as it is.
+  const std::string offsets = o.value("offsets", std::string("auto"));
+  const bool both = offsets == "auto" && OffsetsStandOut(record);
+  if (offsets == "mean" || both) {
+    const size_t plain = variants.size();
+    for (size_t k = 0; k < plain; ++k) {
+      Variant v = variants[k];
+      v.label += " mean";
+      v.options["offsets"] = "mean";
+      if (offsets == "mean") variants[k] = v;
+      else variants.push_back(v);
     }
   }
   bool by_energy = true;
@@ -172,8 +201,7 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
             break;
           }
           if (status != "ok" && c.note.empty()) c.note = fold + "status " + status;
-          const LtiModel model = ModelFromJson(r.json.at("model"));
-          const Eigen::MatrixXd sim = Simulate(model, record.u, record.sample_time);
+          const Eigen::MatrixXd sim = SimulateModelJson(r.json.at("model"), record.u, record.sample_time);
           const Eigen::VectorXd fit = FitPercent(record.y.bottomRows(samples - split), sim.bottomRows(samples - split));
           if (!fit.allFinite()) {
             c.note = fold + "the simulation diverges";
@@ -260,7 +288,11 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
        << 100 * tolerance << " % of the best score, then the first method in the list (";
   for (size_t k = 0; k < variants.size(); ++k) rule << (k ? ", " : "") << variants[k].label;
   rule << ")";
+  if (both)
+    rule << "; the record's means stand out (more than " << kOffsetShare
+         << " of a channel's range), so every candidate is also fitted about them (\"mean\": y = y0 + G(u - u0))";
   selection["candidates"] = rows;
+  selection["offsets"] = offsets == "auto" ? (both ? "chosen on the folds" : "none (the record is about zero)") : offsets;
   selection["rule"] = rule.str();
   selection["folds"] = folds;
   selection["chosen"] = {{"candidate", chosen->label}, {"method", chosen->method}, {"options", chosen->options},
@@ -271,8 +303,9 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
   report.json["selection"] = selection;
   std::ostringstream t;
   t << std::setprecision(4) << std::fixed;
+  const int width = both ? 14 : 12;
   t << "Method and order chosen on held-out data: " << rule.str() << "\n\n  order";
-  for (const auto& v : variants) t << std::setw(12) << v.label;
+  for (const auto& v : variants) t << std::setw(width) << v.label;
   t << "   (score %: 100(1 - RMS NRMSE) over the folds)\n";
   for (size_t k = 0; k < table.size(); k += variants.size()) {
     t << "  " << std::setw(5) << table[k].order;
@@ -283,7 +316,7 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
       if (!std::isfinite(c.fit)) cell << "-";
       else if (c.fit < -999.0) cell << "< -999";  // a diverging fit; the JSON has the value
       else cell << c.fit;
-      t << std::setw(11) << cell.str() << (&c == chosen ? "*" : " ");
+      t << std::setw(width - 1) << cell.str() << (&c == chosen ? "*" : " ");
     }
     t << "\n";
   }

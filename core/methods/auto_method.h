@@ -3,7 +3,18 @@
 #include <Eigen/Dense>
 #include <vector>
 
+#include "core/numeric/io_record.h"
+
 namespace idrig {
+
+// A channel's mean "stands out" when |mean| > kOffsetShare·(max − min): a rig run about an
+// operating point with actuator and sensor offsets, not a test signal about zero (a PRBS ±a
+// has |mean| ≤ a/N; the response of a slow plant to it has a mean that is a larger share of its
+// RMS spread, but not of its range). auto then also fits every candidate about the record's
+// means (option offsets=mean) and lets the folds choose, so a step test from rest, whose means
+// stand out too, keeps its from-rest fit when that is better.
+inline constexpr double kOffsetShare = 0.1;
+bool OffsetsStandOut(const IoRecord& record);
 
 // The first sample index s at which the cumulative input energy reaches `fraction` of its
 // total: Σ_{k<s} Σ_j (u_j[k] − ū_j)² / (nu·E_j) >= fraction, E_j = Σ_k (u_j[k] − ū_j)² (each

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "core/io/csv.h"
+#include "core/io/model_json.h"
 #include "core/methods/report_checks.h"
 
 namespace idrig {
@@ -62,22 +63,73 @@ MethodReport Finish(const MethodInfo& info, MethodReport report, double sample_t
   ApplyModelChecks(&report, min_fit);
   return report;
 }
+
+
+// The common option "offsets" (see registry.h): removed from the options of every method but
+// auto, which chooses between the treatments itself.
+std::string TakeOffsetsOption(const MethodInfo& info, nlohmann::json* options) {
+  if (!options->is_object() || !options->contains("offsets")) return "none";
+  const nlohmann::json v = (*options)["offsets"];
+  const bool chooses = info.name == "auto";
+  if (!v.is_string() || (v != "none" && v != "mean" && !(chooses && v == "auto")))
+    throw std::invalid_argument("option 'offsets' must be " + std::string(chooses ? "'auto', " : "") +
+                                "'none' or 'mean' (the record's means as the operating point), got " + v.dump() +
+                                (v == "auto" ? ": 'auto' (chosen on held-out data) is for the method auto" : ""));
+  if (chooses) return "none";  // auto reads it from its options
+  options->erase("offsets");
+  return v.get<std::string>();
+}
+
+// Runs the method on the record's deviations about its means; the model carries the operating
+// point, y = y0 + G(u − u0), and every fit the method reports is the same on the record itself
+// (a fit is normalised by the spread about the mean).
+MethodReport RunAboutRecordMeans(const MethodInfo& info, const IoRecord& record, const nlohmann::json& options) {
+  const OperatingPoint op = RecordMeans(record);
+  const IoRecord deviations = Deviations(record, op);
+  MethodInput input;
+  input.record = &deviations;
+  MethodReport report = info.run(input, options);
+  const nlohmann::json point = OperatingPointToJson(op);
+  if (report.json.contains("model") && report.json["model"].is_object()) report.json["model"]["operating_point"] = point;
+  report.json["operating_point"] = point;
+  report.json["operating_point"]["source"] = "record means";
+  std::ostringstream t;
+  t << "Operating point (the record's means) removed first; the model maps deviations, y = y0 + G(u - u0): u0 =";
+  for (int i = 0; i < op.u.size(); ++i) t << " " << op.u(i);
+  t << ", y0 =";
+  for (int i = 0; i < op.y.size(); ++i) t << " " << op.y(i);
+  report.text = t.str() + "\n" + report.text;
+  return report;
+}
+
+MethodReport RunOnRecord(const MethodInfo& info, const IoRecord& record, const nlohmann::json& options) {
+  nlohmann::json method_options = options;
+  const double min_fit = TakeMinFitOption(&method_options);
+  const std::string offsets = TakeOffsetsOption(info, &method_options);
+  MethodInput input;
+  input.record = &record;
+  MethodReport report = offsets == "mean" ? RunAboutRecordMeans(info, record, method_options)
+                                          : info.run(input, method_options);
+  return Finish(info, std::move(report), record.sample_time, min_fit);
+}
 }  // namespace
 
 MethodReport RunMethod(const std::string& name, const std::string& data_path,
                        const nlohmann::json& options) {
   const MethodInfo& info = FindMethod(name);
+  if (info.needs_record) {
+    const IoRecord record = ReadIoRecordCsv(data_path);
+    CheckRecordMagnitude(record);
+    return RunOnRecord(info, record, options);
+  }
   nlohmann::json method_options = options;
   const double min_fit = TakeMinFitOption(&method_options);
+  if (method_options.is_object() && method_options.contains("offsets"))
+    throw std::invalid_argument("option 'offsets' is for methods that take a time record; '" + name +
+                                "' reads " + data_path + " itself");
   MethodInput input;
   input.path = data_path;
-  IoRecord record;
-  if (info.needs_record) {
-    record = ReadIoRecordCsv(data_path);
-    CheckRecordMagnitude(record);
-    input.record = &record;
-  }
-  return Finish(info, info.run(input, method_options), info.needs_record ? record.sample_time : 0.0, min_fit);
+  return Finish(info, info.run(input, method_options), 0.0, min_fit);
 }
 
 MethodReport RunMethod(const std::string& name, const IoRecord& record,
@@ -87,11 +139,7 @@ MethodReport RunMethod(const std::string& name, const IoRecord& record,
     throw std::invalid_argument("method '" + name + "' reads its data from a file, not a time record");
   ValidateIoRecord(record);
   CheckRecordMagnitude(record);
-  nlohmann::json method_options = options;
-  const double min_fit = TakeMinFitOption(&method_options);
-  MethodInput input;
-  input.record = &record;
-  return Finish(info, info.run(input, method_options), record.sample_time, min_fit);
+  return RunOnRecord(info, record, options);
 }
 
 void CheckOptionKeys(const nlohmann::json& options, const std::vector<std::string>& known,

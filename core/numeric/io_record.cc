@@ -75,4 +75,23 @@ IoRecord Slice(const IoRecord& record, int begin, int end) {
   return out;
 }
 
+OperatingPoint RecordMeans(const IoRecord& record) {
+  OperatingPoint op;
+  op.u = record.u.colwise().mean().transpose();
+  op.y = record.y.colwise().mean().transpose();
+  return op;
+}
+
+IoRecord Deviations(const IoRecord& record, const OperatingPoint& op) {
+  if (op.u.size() != record.NumInputs() || op.y.size() != record.NumOutputs())
+    throw std::invalid_argument("operating point: " + std::to_string(op.u.size()) + " input and " +
+                                std::to_string(op.y.size()) + " output values for a record with " +
+                                std::to_string(record.NumInputs()) + " inputs and " +
+                                std::to_string(record.NumOutputs()) + " outputs");
+  IoRecord out = record;
+  out.u.rowwise() -= op.u.transpose();
+  out.y.rowwise() -= op.y.transpose();
+  return out;
+}
+
 }  // namespace idrig

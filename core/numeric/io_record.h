@@ -29,4 +29,17 @@ void ValidateIoRecord(const IoRecord& record, int min_samples = 2);
 // Samples [begin, end) as a new record (times kept).
 IoRecord Slice(const IoRecord& record, int begin, int end);
 
+// The operating point (u0, y0) of a record, one value per channel: a linear model of the
+// deviations, y − y0 = G(u − u0), is identified from a rig that runs about a set point with
+// actuator and sensor offsets (`identify --offsets mean`). Empty vectors: no operating point.
+struct OperatingPoint {
+  Eigen::VectorXd u, y;
+  bool empty() const { return u.size() == 0 && y.size() == 0; }
+};
+// The record's means per channel (the least-squares operating point of a record whose
+// deviations average out: MATLAB's detrend(data, 0)).
+OperatingPoint RecordMeans(const IoRecord& record);
+// The record with u0 and y0 subtracted. Throws std::invalid_argument when the sizes differ.
+IoRecord Deviations(const IoRecord& record, const OperatingPoint& op);
+
 }  // namespace idrig

@@ -122,7 +122,7 @@ model_result_t Compute(identify_request_t request, IoRecord record, std::string 
     // whole record (core/numeric/validation.h), so models of different methods compare.
     try {
       const Eigen::MatrixXd simulated =
-          Simulate(ModelFromJson(json.at("model")), record.u, record.sample_time);
+          SimulateModelJson(json.at("model"), record.u, record.sample_time);  // about its operating point
       json["record_fit_percent"] = FitPercent(record.y, simulated)(0);
     } catch (const std::exception&) {
       // a model that cannot be simulated on the record has no record fit

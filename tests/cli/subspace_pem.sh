@@ -44,5 +44,23 @@ awk -F, 'NR == 1 { print; next } { print $1 "," $2 ",0.5," $4 "," $5 }' "$dir/mi
 expect "input 2 is constant" "$idrig" identify --data "$dir/const.csv" --method n4sid
 expect "unknown option 'blocks'" "$idrig" identify --data "$dir/mimo.csv" --method n4sid --option blocks=3
 expect "weighting 'pca'" "$idrig" identify --data "$dir/mimo.csv" --method n4sid --option weighting=pca
+# A rig run about an operating point: the example record with its command 0.7 higher and its
+# reading 5 higher. auto fits about the means (a "mean" candidate wins), the model carries its
+# operating point, and `idrig simulate` reproduces the offset record with it (fit > 90 %; the
+# noise of the example record leaves 93 %, as the plain fit of the plain record).
+awk -F, 'NR == 1 { print; next } { printf "%s,%.17g,%.17g\n", $1, $2 + 0.7, $3 + 5 }' "$dir/ex.csv" > "$dir/op.csv"
+out=$("$idrig" identify --data "$dir/op.csv") || fail "identify on an offset record failed"
+grep -Eq "^chosen: [a-z0-9= -]+ mean order 3 " <<<"$out" || fail "offset record: no 'mean' order-3 choice: $(grep '^chosen' <<<"$out")"
+"$idrig" identify --data "$dir/op.csv" --method oe --order 3 --offsets mean --json > "$dir/op.json" || fail "oe --offsets mean failed"
+grep -q '"operating_point"' "$dir/op.json" || fail "no operating_point in the model"
+"$idrig" simulate --model "$dir/op.json" --data "$dir/op.csv" --out "$dir/op-sim.csv" || fail "simulate about the operating point failed"
+fit=$(paste -d, "$dir/op.csv" "$dir/op-sim.csv" | awk -F, 'NR > 1 { y[NR] = $3; s[NR] = $6; m += $3; n++ }
+  END { m /= n; for (k in y) { e += (y[k] - s[k])^2; d += (y[k] - m)^2 } printf "%.1f", 100 * (1 - sqrt(e / d)) }')
+awk -v f="$fit" 'BEGIN { exit !(f > 90) }' || fail "simulate about the operating point: fit $fit %"
+expect "--offsets: median not in" "$idrig" identify --data "$dir/op.csv" --offsets median
+expect "is for the method auto" "$idrig" identify --data "$dir/op.csv" --method oe --offsets auto
+printf '{"format":"idrig.model/1","kind":"tf","num":[1],"den":[1,1],"operating_point":{"u":[1,2],"y":[0]}}' > "$dir/op-bad.json"
+expect "\"operating_point\" has 2 input and 1 output values" "$idrig" simulate --model "$dir/op-bad.json" --data "$dir/op.csv"
+
 [ $status -eq 0 ] && echo "cli.subspace_pem: ok"
 exit $status

@@ -53,14 +53,15 @@ void RegisterSimulateCommand(CLI::App& app) {
     std::string model, data, out;
   };
   auto args = std::make_shared<Args>();
-  auto* cmd = app.add_subcommand("simulate", "simulate a model (idrig.model/1) on the inputs of a record (exact ZOH)");
+  auto* cmd = app.add_subcommand("simulate", "simulate a model (idrig.model/1) on the inputs of a record (exact ZOH; about the model's operating point when it has one)");
   cmd->add_option("--model", args->model, "model JSON")->required();
   cmd->add_option("--data", args->data, "record whose input columns drive the model")->required();
   cmd->add_option("--out", args->out, "CSV to write (t, inputs, simulated outputs); default stdout");
   cmd->callback([args] {
-    const LtiModel model = ReadModelFile(args->model);
+    const nlohmann::json model = ReadModelJsonFile(args->model);
     IoRecord record = ReadIoRecordCsv(args->data);
-    const Eigen::MatrixXd y = Simulate(model, record.u, record.sample_time);
+    // From rest at the model's operating point when it has one: y0 + G(u − u0).
+    const Eigen::MatrixXd y = SimulateModelJson(model, record.u, record.sample_time);
     record.y = y;
     record.output_names.clear();
     if (args->out.empty()) std::cout << FormatIoRecordCsv(record);

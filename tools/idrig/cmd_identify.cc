@@ -52,7 +52,7 @@ nlohmann::json ParseFrequencies(const std::string& text) {
 
 void RegisterIdentifyCommand(CLI::App& app) {
   struct Args {
-    std::string data, method = "auto", options_json, frequencies, u_names, y_names;
+    std::string data, method = "auto", options_json, frequencies, u_names, y_names, offsets;
     int order = 0;
     double ts = 0.0;
     std::vector<std::string> options;
@@ -74,6 +74,11 @@ void RegisterIdentifyCommand(CLI::App& app) {
   CLI::Option* frequencies = cmd->add_option("--frequencies", args->frequencies,
                   "test frequencies w1,w2,... [rad/s] (methods that take them: finite-frequency); "
                   "the same as --option \"frequencies=[w1,w2,...]\"");
+  cmd->add_option("--offsets", args->offsets,
+                  "operating point: none (the record as it is), mean (fit the deviations about the record's means; "
+                  "the model carries them as \"operating_point\"), auto (method auto only, its default: both, "
+                  "chosen on held-out data when the means stand out)")
+      ->check(CLI::IsMember({"none", "mean", "auto"}));
   cmd->add_flag("--json", args->json, "print the model as idrig.model/1 JSON (with an \"identification\" report)");
   cmd->callback([args, frequencies] {
     nlohmann::json options = args->options_json.empty()
@@ -83,6 +88,7 @@ void RegisterIdentifyCommand(CLI::App& app) {
       throw std::invalid_argument("--options-json must be a JSON object, got '" +
                                   args->options_json + "'");
     if (args->order > 0) options["order"] = args->order;
+    if (!args->offsets.empty()) options["offsets"] = args->offsets;
     for (const auto& kv : args->options) {
       const auto eq = kv.find('=');
       if (eq == std::string::npos || eq == 0)
