@@ -1,5 +1,6 @@
 #include "core/io/csv.h"
 
+#include <algorithm>
 #include <cctype>
 #include <fstream>
 #include <iomanip>
@@ -20,6 +21,10 @@ constexpr std::string_view kStrip = " \t\r\n\"";
 // One pass over the text (csv_scan.h): fields are views into it, numbers by std::from_chars,
 // the values go into one row-major buffer.
 IoRecord ParseIoRecordCsv(const std::string& text, const std::string& source_name) {
+  return ParseIoRecordCsv(text, source_name, nullptr);
+}
+
+IoRecord ParseIoRecordCsv(const std::string& text, const std::string& source_name, const CsvColumns* select) {
   auto fail = [&](const std::string& what) {
     throw std::invalid_argument(source_name + ": " + what);
   };
@@ -44,9 +49,44 @@ IoRecord ParseIoRecordCsv(const std::string& text, const std::string& source_nam
   int time_column = -1;
   std::vector<int> input_columns, output_columns;
   IoRecord record;
-  for (size_t c = 0; c < header.size(); ++c) {
-    std::string name;
-    for (char ch : header[c]) name += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  auto lower = [](const std::string& text) {
+    std::string out;
+    for (char ch : text) out += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    return out;
+  };
+  if (select != nullptr) {
+    auto names = [&] {
+      std::string list;
+      for (const auto& h : header) list += (list.empty() ? "" : ", ") + h;
+      return list;
+    };
+    auto find = [&](const std::string& name, const char* role) {
+      int found = -1;
+      for (size_t c = 0; c < header.size(); ++c)
+        if (header[c] == name) found = static_cast<int>(c);
+      if (found < 0) fail("no column '" + name + "' (" + role + ") in the header; its columns: " + names());
+      if (found == time_column || std::count(input_columns.begin(), input_columns.end(), found) > 0 ||
+          std::count(output_columns.begin(), output_columns.end(), found) > 0)
+        fail("column '" + name + "' is named twice (" + role + ")");
+      return found;
+    };
+    if (!select->time.empty()) {
+      time_column = find(select->time, "time");
+    } else {
+      for (size_t c = 0; c < header.size() && time_column < 0; ++c)
+        if (lower(header[c]) == "t" || lower(header[c]) == "time") time_column = static_cast<int>(c);
+    }
+    for (const auto& name : select->inputs) {
+      input_columns.push_back(find(name, "input"));
+      record.input_names.push_back(name);
+    }
+    for (const auto& name : select->outputs) {
+      output_columns.push_back(find(name, "output"));
+      record.output_names.push_back(name);
+    }
+  }
+  for (size_t c = 0; c < header.size() && select == nullptr; ++c) {
+    const std::string name = lower(header[c]);
     if (name == "t" || name == "time") {
       if (time_column >= 0) fail("two time columns in the header");
       time_column = static_cast<int>(c);
@@ -57,7 +97,8 @@ IoRecord ParseIoRecordCsv(const std::string& text, const std::string& source_nam
       output_columns.push_back(static_cast<int>(c));
       record.output_names.push_back(header[c]);
     } else {
-      fail("column '" + header[c] + "' is not t, u… or y… (header must be t,u,y or t,u1,…,y1,…)");
+      fail("column '" + header[c] + "' is not t, u… or y… (header must be t,u,y or t,u1,…,y1,…; "
+           "a rig's own names are chosen with --u NAME --y NAME)");
     }
   }
   if (time_column < 0) fail("no time column 't' in the header");
@@ -115,6 +156,24 @@ IoRecord ParseIoRecordCsv(const std::string& text, const std::string& source_nam
 
 IoRecord ReadIoRecordCsv(const std::string& path) {
   return ParseIoRecordCsv(csv::ReadFile(path, path + ": cannot open the file for reading"), path);
+}
+
+IoRecord ReadIoRecordCsv(const std::string& path, const CsvColumns& columns) {
+  return ParseIoRecordCsv(csv::ReadFile(path, path + ": cannot open the file for reading"), path, &columns);
+}
+
+std::vector<std::string> SplitColumnNames(const std::string& list, const std::string& what) {
+  std::vector<std::string> names;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = list.find(',', start);
+    const std::string_view item = csv::Trim(std::string_view(list).substr(start, comma == std::string::npos ? std::string::npos : comma - start), kStrip);
+    if (item.empty()) throw std::invalid_argument(what + ": an empty column name in '" + list + "'");
+    names.emplace_back(item);
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return names;
 }
 
 std::string FormatIoRecordCsv(const IoRecord& record) {

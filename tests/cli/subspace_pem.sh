@@ -62,5 +62,23 @@ expect "is for the method auto" "$idrig" identify --data "$dir/op.csv" --method 
 printf '{"format":"idrig.model/1","kind":"tf","num":[1],"den":[1,1],"operating_point":{"u":[1,2],"y":[0]}}' > "$dir/op-bad.json"
 expect "\"operating_point\" has 2 input and 1 output values" "$idrig" simulate --model "$dir/op-bad.json" --data "$dir/op.csv"
 
+# A rig's own column names: the same record as stamp,mode,force,position (an extra column left
+# out) gives the same model as t,u,y; gap diagnose reads such records too; a missing column and
+# a lone --u are named.
+awk -F, 'NR == 1 { print "stamp,mode,force,position"; next } { print $1 ",3," $2 "," $3 }' "$dir/op.csv" > "$dir/rig.csv"
+a=$("$idrig" identify --data "$dir/op.csv" --method oe --order 3 --offsets mean | tail -1)
+b=$("$idrig" identify --data "$dir/rig.csv" --u force --y position --time stamp --method oe --order 3 --offsets mean | tail -1)
+[ -n "$a" ] && [ "$a" = "$b" ] || fail "named columns: '$b' against '$a'"
+head -601 "$dir/rig.csv" > "$dir/rig-est.csv"; { head -1 "$dir/rig.csv"; tail -n +602 "$dir/rig.csv"; } > "$dir/rig-val.csv"
+"$idrig" identify --data "$dir/rig-est.csv" --u force --y position --time stamp --method oe --order 3 --json > "$dir/rig-sim.json"
+"$idrig" gap diagnose --sim "$dir/rig-sim.json" --data "$dir/rig-est.csv" --validate "$dir/rig-val.csv" \
+  --u force --y position --time stamp --json > "$dir/rig-gap.json" || fail "gap diagnose on named columns failed"
+grep -q '"verdict"' "$dir/rig-gap.json" || fail "gap diagnose on named columns: no verdict"
+expect "no column 'pos' (output) in the header; its columns: stamp, mode, force, position" \
+  "$idrig" identify --data "$dir/rig.csv" --u force --y pos --time stamp
+expect "need both --u and --y" "$idrig" identify --data "$dir/rig.csv" --u force
+expect "column 'stamp' is not t, u… or y…" "$idrig" identify --data "$dir/rig.csv"
+expect "need both --u and --y" "$idrig" gap diagnose --sim "$dir/rig-sim.json" --data "$dir/rig-est.csv" --y position
+
 [ $status -eq 0 ] && echo "cli.subspace_pem: ok"
 exit $status

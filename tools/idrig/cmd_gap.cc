@@ -220,7 +220,7 @@ void RegisterGapCommand(CLI::App& app) {
   struct DiagnoseArgs {
     std::string sim;
     std::vector<std::string> data, validate;
-    std::string plots;
+    std::string plots, u_name, y_name, time_name;
     bool json = false;
   };
   auto d = std::make_shared<DiagnoseArgs>();
@@ -230,13 +230,22 @@ void RegisterGapCommand(CLI::App& app) {
   diagnose->add_option("--data", d->data, "estimation record CSV t,u,y (repeatable)")->required();
   diagnose->add_option("--validate", d->validate, "held-out validation record CSV (repeatable); "
                                                   "absent: one record is split in time");
+  diagnose->add_option("--u", d->u_name, "the input column of records with their own column names (default: u)");
+  diagnose->add_option("--y", d->y_name, "the output column (default: y)");
+  diagnose->add_option("--time", d->time_name, "the time column (default: t or time)");
   diagnose->add_flag("--json", d->json, "print the report as JSON (idrig.gap/1)");
   diagnose->add_option("--plots", d->plots, "also write SVG plots of the gap (frequency, amplitude, state, time, ranking) into this directory");
   diagnose->callback([d] {
     const TransferFunction sim = SimModelTransferFunction(ReadModelFile(d->sim));
     std::vector<GapRecord> estimation, validation;
-    for (const auto& p : d->data) estimation.push_back(ToGapRecord(ReadIoRecordCsv(p)));
-    for (const auto& p : d->validate) validation.push_back(ToGapRecord(ReadIoRecordCsv(p)));
+    const bool named = !d->u_name.empty() || !d->y_name.empty() || !d->time_name.empty();
+    if (named && (d->u_name.empty() || d->y_name.empty()))
+      throw std::invalid_argument("records with their own column names need both --u and --y (and --time when "
+                                  "the time column is not t or time)");
+    const CsvColumns columns{{d->u_name}, {d->y_name}, d->time_name};
+    auto read = [&](const std::string& path) { return named ? ReadIoRecordCsv(path, columns) : ReadIoRecordCsv(path); };
+    for (const auto& p : d->data) estimation.push_back(ToGapRecord(read(p)));
+    for (const auto& p : d->validate) validation.push_back(ToGapRecord(read(p)));
     const GapReport report = DiagnoseGap(sim, estimation, validation);
     nlohmann::json out = GapReportToJson(report);
     out["sim"] = d->sim;

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/io/csv.h"
 #include "core/io/mat_io.h"
 #include "core/methods/registry.h"
 #include "tools/idrig/commands.h"
@@ -52,7 +53,7 @@ nlohmann::json ParseFrequencies(const std::string& text) {
 
 void RegisterIdentifyCommand(CLI::App& app) {
   struct Args {
-    std::string data, method = "auto", options_json, frequencies, u_names, y_names, offsets;
+    std::string data, method = "auto", options_json, frequencies, u_names, y_names, offsets, time_name;
     int order = 0;
     double ts = 0.0;
     std::vector<std::string> options;
@@ -63,8 +64,10 @@ void RegisterIdentifyCommand(CLI::App& app) {
   for (const auto& m : Methods()) methods_help += "\n  " + m.name + ": " + m.summary;
   auto* cmd = app.add_subcommand("identify", "identify a model from a record (CSV t,u,y or t,u1,..,y1,..)");
   cmd->add_option("--data", args->data, "data file: CSV record or FRF table, or MATLAB .mat (with --u, --y)")->required();
-  cmd->add_option("--u", args->u_names, ".mat files: the input variable(s), comma-separated");
-  cmd->add_option("--y", args->y_names, ".mat files: the output variable(s), comma-separated");
+  cmd->add_option("--u", args->u_names, "the input variable(s) of a .mat file, or the input column(s) of a CSV "
+                  "record with its own names, comma-separated (CSV default: columns u… are inputs)");
+  cmd->add_option("--y", args->y_names, "the output variable(s) or column(s), comma-separated (CSV default: y…)");
+  cmd->add_option("--time", args->time_name, "CSV: the time column (default: t or time)");
   cmd->add_option("--ts", args->ts, ".mat files: sample time [s] (default: the file's Ts, or its time vector t)");
   cmd->add_option("--method", args->method, methods_help + "\n(default: auto)");
   cmd->add_option("--order", args->order, "model order (0 or absent: chosen automatically)")
@@ -107,15 +110,28 @@ void RegisterIdentifyCommand(CLI::App& app) {
       options["frequencies"] = ParseFrequencies(args->frequencies);
     }
     const bool mat = args->data.size() > 4 && args->data.compare(args->data.size() - 4, 4, ".mat") == 0;
-    if (!mat && (!args->u_names.empty() || !args->y_names.empty() || args->ts != 0.0))
-      throw std::invalid_argument("--u, --y and --ts are for MATLAB .mat data; '" + args->data +
-                                  "' is read as CSV (t,u,y header)");
+    if (!mat && args->ts != 0.0)
+      throw std::invalid_argument("--ts is for MATLAB .mat data; '" + args->data +
+                                  "' is read as CSV, whose time column gives the sample time");
+    if (mat && !args->time_name.empty())
+      throw std::invalid_argument("--time names a CSV column; for .mat data give --ts");
     if (mat && (args->u_names.empty() || args->y_names.empty()))
       throw std::invalid_argument(args->data + ": name the input and output variables: --u NAME --y NAME (variables: " +
                                   [&] { std::string l; for (const auto& n : MatVariableNames(args->data)) l += (l.empty() ? "" : ", ") + n; return l; }() + ")");
+    const bool named = !args->u_names.empty() || !args->y_names.empty() || !args->time_name.empty();
+    if (!mat && named && (args->u_names.empty() || args->y_names.empty()))
+      throw std::invalid_argument("a CSV record's own column names need both --u and --y (and --time when the "
+                                  "time column is not t or time)");
+    if (!mat && named && !FindMethod(args->method).needs_record)
+      throw std::invalid_argument("--u, --y and --time choose the columns of a time record; method '" +
+                                  args->method + "' reads its file itself");
     const MethodReport report =
-        mat ? RunMethod(args->method, ReadMatRecord(args->data, args->u_names, args->y_names, args->ts), options)
-            : RunMethod(args->method, args->data, options);
+        mat     ? RunMethod(args->method, ReadMatRecord(args->data, args->u_names, args->y_names, args->ts), options)
+        : named ? RunMethod(args->method,
+                            ReadIoRecordCsv(args->data, {SplitColumnNames(args->u_names, "--u"),
+                                                         SplitColumnNames(args->y_names, "--y"), args->time_name}),
+                            options)
+                : RunMethod(args->method, args->data, options);
     if (args->json) {
       nlohmann::json model = report.json.at("model");
       nlohmann::json identification = report.json;

@@ -92,6 +92,40 @@ TEST(Csv, NumberFormsAndLineEndsAsBefore) {
   std::remove(path.c_str());
 }
 
+// A rig's own column names (identify/gap diagnose --u --y --time): the named columns in the
+// order given, other columns left out; without a selection such a header is refused.
+TEST(Csv, ColumnsChosenByName) {
+  const std::string text = "stamp,mode,valve_b,valve_a,level\n0,1,0.5,1,10\n0.5,1,0.25,2,11\n1,2,0,3,12\n";
+  const CsvColumns rig{{"valve_a", "valve_b"}, {"level"}, "stamp"};
+  const IoRecord r = ParseIoRecordCsv(text, "rig.csv", &rig);
+  ASSERT_EQ(r.NumInputs(), 2);
+  ASSERT_EQ(r.NumOutputs(), 1);
+  EXPECT_DOUBLE_EQ(r.u(1, 0), 2.0);
+  EXPECT_DOUBLE_EQ(r.u(1, 1), 0.25);
+  EXPECT_DOUBLE_EQ(r.y(2, 0), 12.0);
+  EXPECT_DOUBLE_EQ(r.sample_time, 0.5);
+  EXPECT_EQ(r.input_names, (std::vector<std::string>{"valve_a", "valve_b"}));
+  const CsvColumns fx{{"f"}, {"x"}, ""};
+  const IoRecord t = ParseIoRecordCsv("Time,f,x\n0,1,2\n0.1,3,4\n", "t.csv", &fx);
+  EXPECT_DOUBLE_EQ(t.sample_time, 0.1);
+  auto message = [&](const CsvColumns& c) {
+    try {
+      ParseIoRecordCsv(text, "rig.csv", &c);
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message({{"valve_a"}, {"lvl"}, "stamp"}),
+            "rig.csv: no column 'lvl' (output) in the header; its columns: stamp, mode, valve_b, valve_a, level");
+  EXPECT_EQ(message({{"valve_a"}, {"valve_a"}, "stamp"}), "rig.csv: column 'valve_a' is named twice (output)");
+  EXPECT_EQ(message({{"valve_a"}, {"level"}, ""}), "rig.csv: no time column 't' in the header");
+  EXPECT_NE(message({{"valve_a"}, {"level"}, "mode"}).find("not increasing"), std::string::npos);
+  EXPECT_THROW(ParseIoRecordCsv(text, "rig.csv"), std::invalid_argument);
+  EXPECT_EQ(SplitColumnNames(" a, b ", "--u"), (std::vector<std::string>{"a", "b"}));
+  EXPECT_THROW(SplitColumnNames("a,,b", "--u"), std::invalid_argument);
+}
+
 TEST(CsvBadInput, UnreadableFile) {
   EXPECT_THROW(ReadIoRecordCsv("/nonexistent/dir/rec.csv"), std::invalid_argument);
 }
