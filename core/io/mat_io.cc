@@ -259,7 +259,8 @@ void WriteMatRecord(const IoRecord& record, const std::string& path,
   for (const auto& [name, value] : text) w.Text(name, value);
 }
 
-void WriteMatModel(const LtiModel& model, const std::string& path, const nlohmann::json& lineage) {
+void WriteMatModel(const LtiModel& model, const std::string& path, const nlohmann::json& lineage,
+                   const OperatingPoint& operating_point) {
   MatWriter w(path);
   double ts = 0, delay = 0;
   if (const auto* tf = std::get_if<TransferFunction>(&model)) {
@@ -283,6 +284,10 @@ void WriteMatModel(const LtiModel& model, const std::string& path, const nlohman
   // MATLAB's InputDelay: seconds for continuous models, samples for discrete ones.
   w.Scalar("delay", ts > 0 ? delay / ts : delay);
   w.Scalar("delay_s", delay);
+  if (!operating_point.empty()) {
+    w.Matrix("u0", operating_point.u);
+    w.Matrix("y0", operating_point.y);
+  }
   if (lineage.is_object() && !lineage.empty()) w.Struct("lineage", lineage);
 }
 

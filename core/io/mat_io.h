@@ -8,7 +8,8 @@
 //                 delay is MATLAB's InputDelay: seconds (continuous) or samples (discrete);
 //                 delay_s is always seconds.
 //                 kind ('tf'/'ss'), domain ('continuous'/'discrete'), and a struct `lineage`
-//                 whose fields are the catalogue's lineage (rig, experiment, method, worker, ...).
+//                 whose fields are the catalogue's lineage (rig, experiment, method, worker, ...);
+//                 u0 (nu×1), y0 (ny×1) when the model has an operating point: y = y0 + G(u − u0).
 // Ts = 0 means continuous time (MATLAB's convention for tf/ss too).
 #include <Eigen/Dense>
 #include <map>
@@ -47,6 +48,7 @@ void WriteMatRecord(const IoRecord& record, const std::string& path,
 // Writes a model (see above); `lineage` is a flat JSON object (numbers, strings, booleans;
 // nested values are written as their JSON text) stored as the struct `lineage`.
 void WriteMatModel(const LtiModel& model, const std::string& path,
-                   const nlohmann::json& lineage = nlohmann::json::object());
+                   const nlohmann::json& lineage = nlohmann::json::object(),
+                   const OperatingPoint& operating_point = {});
 
 }  // namespace idrig

@@ -280,10 +280,12 @@ void RegisterModelsCommands(CLI::App& app) {
           lineage[x.name] = x.value;
       const bool mat = out->size() > 4 && out->compare(out->size() - 4, 4, ".mat") == 0;
       if (mat) {  // MATLAB: tf(num, den, Ts, 'InputDelay', delay) or ss(A, B, C, D, Ts, ...)
-        WriteMatModel(ModelFromJson(nlohmann::json::parse(m.model_json)), *out, lineage);
+        const nlohmann::json model = nlohmann::json::parse(m.model_json);
+        const OperatingPoint op = OperatingPointFromModelJson(model);
+        WriteMatModel(ModelFromJson(model), *out, lineage, op);
         std::cerr << "wrote model " << m.model_id << " to " << *out << " (variables "
-                  << (nlohmann::json::parse(m.model_json).value("kind", "") == "tf" ? "num, den" : "A, B, C, D")
-                  << ", Ts, delay, lineage)\n";
+                  << (model.value("kind", "") == "tf" ? "num, den" : "A, B, C, D")
+                  << (op.empty() ? "" : ", u0, y0 (operating point)") << ", Ts, delay, lineage)\n";
         return;
       }
       nlohmann::json j = nlohmann::json::parse(m.model_json);

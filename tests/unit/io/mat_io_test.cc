@@ -84,8 +84,12 @@ TEST(MatIo, ModelFileHasMatlabVariablesAndLineage) {
   EXPECT_NE(Message([&] { ReadMatMatrix(path, "lineage"); }).find("is a struct"), std::string::npos);
   EXPECT_NE(Message([&] { ReadMatMatrix(path, "kind"); }).find("is text (char)"), std::string::npos);
 
+  EXPECT_EQ(std::find(names.begin(), names.end(), "y0"), names.end());  // no operating point
+
   StateSpace ss = ToStateSpace(TransferFunction{tf.num, tf.den});
-  WriteMatModel(ss, path);
+  WriteMatModel(ss, path, nlohmann::json::object(), OperatingPoint{Eigen::VectorXd::Constant(1, 0.7), Eigen::VectorXd::Constant(1, 5.0)});
+  EXPECT_DOUBLE_EQ(ReadMatMatrix(path, "u0")(0, 0), 0.7);
+  EXPECT_DOUBLE_EQ(ReadMatMatrix(path, "y0")(0, 0), 5.0);
   EXPECT_EQ(ReadMatMatrix(path, "A"), ss.A);
   EXPECT_EQ(ReadMatMatrix(path, "D"), ss.D);
   EXPECT_DOUBLE_EQ(ReadMatMatrix(path, "Ts")(0, 0), 0.0);
