@@ -535,6 +535,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
       options.second_effect) {
     PairSearch best;
     int searched = 0;
+    std::vector<EffectKind> searched_kinds;
     for (const CandidateWork& w : work) {
       if (!w.fit.eligible || w.fit.effects.empty()) continue;
       if (searched == 0 && within_floor(w.fit.validation_mse)) {
@@ -553,7 +554,25 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
       PairSearch trial = SearchSecondEffect(ctx, w, top.bic, kinds);
       report.notes.push_back(trial.note);
       ++searched;
+      searched_kinds.push_back(w.fit.effects.front().kind);
       if (trial.kept && (!best.kept || trial.pair.fit.bic < best.pair.fit.bic)) best = std::move(trial);
+    }
+    // The best pair is also reached from its other effect when that was not a first and the
+    // pair still leaves the validation records above the floor: a first effect fitted alone
+    // can sit far from its value in the pair (an input saturation's limits bent to mimic the
+    // friction it lacks), and the pair refit starts from that fit; the second effect fitted
+    // alone, first here, gives the other start (friction with a saturation, zeros plant).
+    if (best.kept && floor_known && !within_floor(best.pair.fit.validation_mse)) {
+      const EffectKind other = best.pair.fit.effects[1].kind;
+      if (std::find(searched_kinds.begin(), searched_kinds.end(), other) == searched_kinds.end())
+        for (const CandidateWork& w : work) {
+          if (!w.fit.eligible || w.fit.effects.empty() || w.fit.effects.front().kind != other) continue;
+          PairSearch trial = SearchSecondEffect(ctx, w, top.bic, kinds);
+          report.notes.push_back(trial.note + " (the best pair's other effect as the first)");
+          ++searched;
+          if (trial.kept && trial.pair.fit.bic < best.pair.fit.bic) best = std::move(trial);
+          break;
+        }
     }
     CandidateWork single;
     std::string prune_note;

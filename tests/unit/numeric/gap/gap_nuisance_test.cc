@@ -506,6 +506,34 @@ TEST(GapOffsetTest, ALimitTheValidationRecordsShowIsNotReleased) {
   EXPECT_LT(limit.nrmse_after, 1.05 * report.verdict.noise_nrmse);
 }
 
+TEST(GapOffsetTest, APairIsAlsoReachedFromItsOtherEffect) {
+  // `idrig gap bench --cases 14 --seed 604 --offsets --combos 1 --plants zeros --excitation
+  // levels`, case 7: Coulomb friction and an input saturation on a plant with a zero. Alone,
+  // the saturation bends its limits to mimic the friction (both above the command's range),
+  // and friction ranks fourth, after the three firsts the pair search starts from; the pair
+  // kept was friction with a dead zone at validation NRMSE 0.33 for a floor of 0.033. The best
+  // pair's other effect (friction) is now also a first, and the saturation found after it.
+  const GapCase c = OffsetBenchCase(604, 7, BenchCaseTruth(7, 1.0), false, "levels", "zeros");
+  ASSERT_EQ(c.effects.size(), 2u);
+  ASSERT_EQ(c.effects[0].kind, EffectKind::kCoulombFriction);
+  ASSERT_EQ(c.effects[1].kind, EffectKind::kInputSaturation);
+  const GapReport report = DiagnoseOnOneThread(c);
+  std::vector<std::string> named;
+  for (const Effect& e : report.verdict.effects) named.push_back(EffectName(e.kind));
+  std::printf("friction + limit: named %s%s%s; NRMSE %.4f, floor %.4f\n", named.empty() ? "" : named[0].c_str(),
+              named.size() > 1 ? " + " : "", named.size() > 1 ? named[1].c_str() : "", report.verdict.nrmse_after,
+              report.verdict.noise_nrmse);
+  ASSERT_EQ(named.size(), 2u);
+  EXPECT_NE(std::find(named.begin(), named.end(), "coulomb_friction"), named.end());
+  EXPECT_NE(std::find(named.begin(), named.end(), "input_saturation"), named.end());
+  for (const Effect& e : report.verdict.effects)
+    if (e.kind == EffectKind::kCoulombFriction) EXPECT_NEAR(e.params[0], c.effects[0].params[0], 0.05 * c.effects[0].params[0]);
+  EXPECT_LT(report.verdict.nrmse_after, 0.5 * 0.33);
+  EXPECT_TRUE(std::any_of(report.notes.begin(), report.notes.end(), [](const std::string& n) {
+    return n.find("the best pair's other effect as the first") != std::string::npos;
+  }));
+}
+
 TEST(GapOffsetTest, AKinkPassedByAHairAtASweepsPeakDoesNotMakeADeadZoneTwoSided) {
   // `idrig gap bench --cases 26 --seed 214 --offsets --plants two-mass --excitation chirp`,
   // case 5: an upper input limit under a constant-amplitude sweep. The dead zone fitted its flat
