@@ -138,13 +138,14 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
   // candidate both ways, and the folds choose; a record about zero is taken as it is.
   const std::string offsets = o.value("offsets", std::string("auto"));
   const bool both = offsets == "auto" && OffsetsStandOut(record);
-  if (offsets == "mean" || both) {
+  if (offsets == "mean" || offsets == "initial" || both) {
+    const std::string treatment = both ? "mean" : offsets;
     const size_t plain = variants.size();
     for (size_t k = 0; k < plain; ++k) {
       Variant v = variants[k];
-      v.label += " mean";
-      v.options["offsets"] = "mean";
-      if (offsets == "mean") variants[k] = v;
+      v.label += " " + treatment;
+      v.options["offsets"] = treatment;
+      if (!both) variants[k] = v;
       else variants.push_back(v);
     }
   }

@@ -71,20 +71,24 @@ std::string TakeOffsetsOption(const MethodInfo& info, nlohmann::json* options) {
   if (!options->is_object() || !options->contains("offsets")) return "none";
   const nlohmann::json v = (*options)["offsets"];
   const bool chooses = info.name == "auto";
-  if (!v.is_string() || (v != "none" && v != "mean" && !(chooses && v == "auto")))
+  if (!v.is_string() || (v != "none" && v != "mean" && v != "initial" && !(chooses && v == "auto")))
     throw std::invalid_argument("option 'offsets' must be " + std::string(chooses ? "'auto', " : "") +
-                                "'none' or 'mean' (the record's means as the operating point), got " + v.dump() +
+                                "'none', 'mean' (the record's means as the operating point) or 'initial' (the rig "
+                                "at rest at it when the record starts), got " + v.dump() +
                                 (v == "auto" ? ": 'auto' (chosen on held-out data) is for the method auto" : ""));
   if (chooses) return "none";  // auto reads it from its options
   options->erase("offsets");
   return v.get<std::string>();
 }
 
-// Runs the method on the record's deviations about its means; the model carries the operating
-// point, y = y0 + G(u − u0), and every fit the method reports is the same on the record itself
-// (a fit is normalised by the spread about the mean).
-MethodReport RunAboutRecordMeans(const MethodInfo& info, const IoRecord& record, const nlohmann::json& options) {
-  const OperatingPoint op = RecordMeans(record);
+// Runs the method on the record's deviations about an operating point (the record's means, or
+// the rig at rest when it starts); the model carries the point, y = y0 + G(u − u0). The fits
+// the method reports are those of the record itself when the point is the means (a fit is
+// normalised by the spread about the mean).
+MethodReport RunAboutOperatingPoint(const MethodInfo& info, const IoRecord& record, const nlohmann::json& options,
+                                    const std::string& offsets) {
+  const bool initial = offsets == "initial";
+  const OperatingPoint op = initial ? InitialRest(record) : RecordMeans(record);
   const IoRecord deviations = Deviations(record, op);
   MethodInput input;
   input.record = &deviations;
@@ -92,9 +96,10 @@ MethodReport RunAboutRecordMeans(const MethodInfo& info, const IoRecord& record,
   const nlohmann::json point = OperatingPointToJson(op);
   if (report.json.contains("model") && report.json["model"].is_object()) report.json["model"]["operating_point"] = point;
   report.json["operating_point"] = point;
-  report.json["operating_point"]["source"] = "record means";
+  report.json["operating_point"]["source"] = initial ? "initial rest" : "record means";
   std::ostringstream t;
-  t << "Operating point (the record's means) removed first; the model maps deviations, y = y0 + G(u - u0): u0 =";
+  t << "Operating point (" << (initial ? "the rig at rest when the record starts" : "the record's means")
+    << ") removed first; the model maps deviations, y = y0 + G(u - u0): u0 =";
   for (int i = 0; i < op.u.size(); ++i) t << " " << op.u(i);
   t << ", y0 =";
   for (int i = 0; i < op.y.size(); ++i) t << " " << op.y(i);
@@ -108,7 +113,7 @@ MethodReport RunOnRecord(const MethodInfo& info, const IoRecord& record, const n
   const std::string offsets = TakeOffsetsOption(info, &method_options);
   MethodInput input;
   input.record = &record;
-  MethodReport report = offsets == "mean" ? RunAboutRecordMeans(info, record, method_options)
+  MethodReport report = offsets != "none" ? RunAboutOperatingPoint(info, record, method_options, offsets)
                                           : info.run(input, method_options);
   return Finish(info, std::move(report), record.sample_time, min_fit);
 }

@@ -44,9 +44,10 @@ const MethodInfo& FindMethod(const std::string& name);
 // the model (unstable, pole at Nyquist, poor fit: report_checks.h), which may lower "status"
 // and adds "warnings". The option min_fit_percent (default 50) is taken by RunMethod itself,
 // and so is "offsets" for every method that takes a time record: "none" (the default: y = G u,
-// as recorded) or "mean" (a rig run about an operating point: the record's means (u0, y0) are
+// as recorded), "mean" (a rig run about an operating point: the record's means (u0, y0) are
 // removed, the method fits the deviations, and the model carries "operating_point", so that
-// y = y0 + G(u − u0); model_json.h). The method auto also takes "auto", its default: both,
+// y = y0 + G(u − u0); model_json.h) or "initial" (the same about the rig at rest when the
+// record starts: a step test from a set point; io_record.h InitialRest). The method auto also takes "auto", its default: both,
 // chosen on its held-out folds when the record's means stand out (auto_method.h).
 MethodReport RunMethod(const std::string& name, const std::string& data_path,
                        const nlohmann::json& options);

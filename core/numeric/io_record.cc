@@ -82,6 +82,17 @@ OperatingPoint RecordMeans(const IoRecord& record) {
   return op;
 }
 
+OperatingPoint InitialRest(const IoRecord& record) {
+  OperatingPoint op;
+  const long n = record.u.rows();
+  if (n == 0) throw std::invalid_argument("operating point: the record has no samples");
+  op.u = record.u.row(0).transpose();
+  long rest = 1;  // samples 0..rest-1 have the first input values
+  while (rest < n && (record.u.row(rest) - record.u.row(0)).cwiseAbs().maxCoeff() == 0.0) ++rest;
+  op.y = record.y.topRows(rest).colwise().mean().transpose();
+  return op;
+}
+
 IoRecord Deviations(const IoRecord& record, const OperatingPoint& op) {
   if (op.u.size() != record.NumInputs() || op.y.size() != record.NumOutputs())
     throw std::invalid_argument("operating point: " + std::to_string(op.u.size()) + " input and " +

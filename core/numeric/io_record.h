@@ -39,6 +39,10 @@ struct OperatingPoint {
 // The record's means per channel (the least-squares operating point of a record whose
 // deviations average out: MATLAB's detrend(data, 0)).
 OperatingPoint RecordMeans(const IoRecord& record);
+// The rig at rest at its operating point when the record starts (a step test from a set point):
+// u0 = the inputs' first values, y0 = the outputs' mean over the samples before any input first
+// changes (the first sample when one changes at once).
+OperatingPoint InitialRest(const IoRecord& record);
 // The record with u0 and y0 subtracted. Throws std::invalid_argument when the sizes differ.
 IoRecord Deviations(const IoRecord& record, const OperatingPoint& op);
 

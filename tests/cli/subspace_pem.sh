@@ -58,6 +58,8 @@ fit=$(paste -d, "$dir/op.csv" "$dir/op-sim.csv" | awk -F, 'NR > 1 { y[NR] = $3; 
   END { m /= n; for (k in y) { e += (y[k] - s[k])^2; d += (y[k] - m)^2 } printf "%.1f", 100 * (1 - sqrt(e / d)) }')
 awk -v f="$fit" 'BEGIN { exit !(f > 90) }' || fail "simulate about the operating point: fit $fit %"
 expect "--offsets: median not in" "$idrig" identify --data "$dir/op.csv" --offsets median
+"$idrig" identify --data "$dir/op.csv" --method oe --order 3 --offsets initial --json | grep -q '"source": "initial rest"' \
+  || fail "--offsets initial: no initial-rest operating point"
 expect "is for the method auto" "$idrig" identify --data "$dir/op.csv" --method oe --offsets auto
 printf '{"format":"idrig.model/1","kind":"tf","num":[1],"den":[1,1],"operating_point":{"u":[1,2],"y":[0]}}' > "$dir/op-bad.json"
 expect "\"operating_point\" has 2 input and 1 output values" "$idrig" simulate --model "$dir/op-bad.json" --data "$dir/op.csv"

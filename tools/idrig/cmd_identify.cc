@@ -79,9 +79,10 @@ void RegisterIdentifyCommand(CLI::App& app) {
                   "the same as --option \"frequencies=[w1,w2,...]\"");
   cmd->add_option("--offsets", args->offsets,
                   "operating point: none (the record as it is), mean (fit the deviations about the record's means; "
-                  "the model carries them as \"operating_point\"), auto (method auto only, its default: both, "
+                  "the model carries them as \"operating_point\"), initial (about the rig at rest when the record "
+                  "starts: a step test from a set point), auto (method auto only, its default: none and mean, "
                   "chosen on held-out data when the means stand out)")
-      ->check(CLI::IsMember({"none", "mean", "auto"}));
+      ->check(CLI::IsMember({"none", "mean", "initial", "auto"}));
   cmd->add_flag("--json", args->json, "print the model as idrig.model/1 JSON (with an \"identification\" report)");
   cmd->callback([args, frequencies] {
     nlohmann::json options = args->options_json.empty()

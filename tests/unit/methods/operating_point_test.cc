@@ -2,6 +2,7 @@
 // set point, with an actuator offset ahead of the plant and a sensor offset after it.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <random>
 
 #include "core/io/model_json.h"
@@ -113,6 +114,37 @@ TEST(OperatingPoint, AStepFromRestKeepsItsPlainFit) {
   const std::string label = r.json.at("selection").at("chosen").at("candidate");
   EXPECT_EQ(label.find(" mean"), std::string::npos) << label;
   EXPECT_FALSE(r.json.at("model").contains("operating_point"));
+}
+
+// A step test from a set point: the rig settled at command 0.6 (sensor offset 2), stepped to 1.6
+// at sample 30. offsets=initial takes u0 = 0.6 and y0 = the mean reading before the step
+// (computed here independently) and simulates the record from rest there; the record's means
+// are not a state the rig was ever at rest in, and about them the same method fits worse.
+TEST(OperatingPoint, InitialRestFitsAStepTestFromASetPoint) {
+  const int samples = 300, step = 30, warm = 200;
+  Eigen::MatrixXd command = Eigen::MatrixXd::Constant(warm + samples, 1, 0.6);
+  command.bottomRows(samples - step).setConstant(1.6);
+  Eigen::MatrixXd y = Simulate(testing::PlantTf(), command, kTs).array() + 2.0;
+  std::mt19937_64 rng(12);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  for (int k = 0; k < y.rows(); ++k) y(k, 0) += noise(rng);
+  const IoRecord record = MakeIoRecord(command.bottomRows(samples), y.bottomRows(samples), kTs);
+  const MethodReport r = RunMethod("oe", record, {{"order", 3}, {"offsets", "initial"}});
+  ASSERT_EQ(r.json.at("status"), "ok") << r.json.value("message", "");
+  const OperatingPoint op = OperatingPointFromModelJson(r.json.at("model"));
+  EXPECT_DOUBLE_EQ(op.u(0), 0.6);
+  EXPECT_NEAR(op.y(0), record.y.col(0).head(step).sum() / step, 1e-12);
+  EXPECT_EQ(r.json.at("operating_point").at("source"), "initial rest");
+  EXPECT_LT(PoleError(r.json.at("model")), 0.05);
+  const double fit = FitPercent(record.y, SimulateModelJson(r.json.at("model"), record.u, kTs))(0);
+  EXPECT_GT(fit, 97.0);
+  const MethodReport m = RunMethod("oe", record, {{"order", 3}, {"offsets", "mean"}});
+  const double mean_fit = FitPercent(record.y, SimulateModelJson(m.json.at("model"), record.u, kTs))(0);
+  std::printf("step from a set point: fit about the initial rest %.2f %%, about the means %.2f %%\n", fit, mean_fit);
+  EXPECT_LT(mean_fit, fit - 5.0);
+  const MethodReport a = RunMethod("auto", record, {{"offsets", "initial"}});
+  const std::string label = a.json.at("selection").at("chosen").at("candidate");
+  EXPECT_NE(label.find(" initial"), std::string::npos) << label;
 }
 
 TEST(OperatingPoint, BadOffsetsOptionsAndPointsAreNamed) {
