@@ -1,8 +1,11 @@
 #include "core/numeric/io_record.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace idrig {
 
@@ -49,16 +52,50 @@ void ValidateIoRecord(const IoRecord& record, int min_samples) {
       if (!(record.t(k) > record.t(k - 1)))
         throw std::invalid_argument("record: time column is not increasing at sample " +
                                     std::to_string(k) + " (t = " + std::to_string(record.t(k)) + ")");
-    for (long k = 1; k < n; ++k) {
+    // A quarter step, per step and against the grid t0 + k·Ts: a missing or repeated sample
+    // is caught, while times printed with few digits (e.g. "%.4f" at Ts = 1/300 s, ±1.5 % per
+    // value) are still read as the uniform grid they are.
+    bool uniform = true;
+    for (long k = 1; k < n && uniform; ++k) {
       const double dt = record.t(k) - record.t(k - 1);
-      // A quarter step, per step and against the grid t0 + k·Ts: a missing or repeated sample
-      // is caught, while times printed with few digits (e.g. "%.4f" at Ts = 1/300 s, ±1.5 % per
-      // value) are still read as the uniform grid they are.
       const double off_grid = record.t(k) - record.t(0) - k * ts;
-      if (std::abs(dt - ts) > 0.25 * ts || std::abs(off_grid) > 0.25 * ts)
-        throw std::invalid_argument("record: time column is not uniform at sample " +
-                                    std::to_string(k) + " (step " + std::to_string(dt) +
-                                    " s, expected " + std::to_string(ts) + " s)");
+      uniform = std::abs(dt - ts) <= 0.25 * ts && std::abs(off_grid) <= 0.25 * ts;
+    }
+    if (!uniform) {
+      // Name the fault against the record's own step (the median one), not against the mean
+      // step, which a single jump distorts: a gap in the time stamps is where samples are
+      // missing or two records were spliced.
+      std::vector<double> steps(static_cast<size_t>(n - 1));
+      for (long k = 1; k < n; ++k) steps[static_cast<size_t>(k - 1)] = record.t(k) - record.t(k - 1);
+      std::vector<double> sorted = steps;
+      std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+      const double step = sorted[sorted.size() / 2];
+      auto fmt = [](double v) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.6g", v);
+        return std::string(buf);
+      };
+      long jumps = 0, first = -1;
+      for (long k = 1; k < n; ++k)
+        if (std::abs(steps[static_cast<size_t>(k - 1)] - step) > 0.25 * step) {
+          ++jumps;
+          if (first < 0) first = k;
+        }
+      if (first < 0)
+        throw std::invalid_argument("record: time column drifts off a uniform grid (step " + fmt(step) +
+                                    " s, but t ends at " + fmt(record.t(n - 1)) + " s where " +
+                                    fmt(record.t(0) + (n - 1) * step) + " s was due)");
+      const double dt = steps[static_cast<size_t>(first - 1)];
+      const std::string what =
+          dt > step ? "about " + std::to_string(std::lround(dt / step) - 1) +
+                          " samples missing or two records spliced there"
+                    : "a sample repeated or the rate changed there";
+      throw std::invalid_argument("record: time column is not uniform at sample " + std::to_string(first) +
+                                  ": t jumps from " + fmt(record.t(first - 1)) + " to " +
+                                  fmt(record.t(first)) + " s where the record's step is " + fmt(step) +
+                                  " s (" + what + "; " + std::to_string(jumps) +
+                                  (jumps == 1 ? " such step" : " such steps") +
+                                  "); split the record there or give each part separately");
     }
   }
 }

@@ -66,6 +66,21 @@ TEST(CsvBadInput, EachProblemIsNamed) {
   ExpectError("t,u,y\n0,1,2\n1,1,2\n2.5,1,2\n3.5,1,2\n", "not uniform");
 }
 
+// A record with a stretch cut out (a splice) is named at the jump, against the record's own
+// step: the mean step, which the jump distorts, had put the fault at the first sample.
+TEST(Csv, ASplicedRecordIsNamedAtItsJump) {
+  std::string text = "t,u,y\n";
+  for (int k = 0; k < 1000; ++k) {
+    if (k >= 600 && k < 800) continue;  // 200 samples cut out
+    text += std::to_string(0.01 * k) + ",1,2\n";
+  }
+  ExpectError(text, "not uniform at sample 600: t jumps from 5.99 to 8 s where the record's step is 0.01 s "
+                    "(about 200 samples missing or two records spliced there; 1 such step)");
+  std::string drift = "t,u,y\n";
+  for (int k = 0; k < 400; ++k) drift += std::to_string(0.0101 * k * (1.0 + 0.002 * k)) + ",1,2\n";
+  ExpectError(drift, "not uniform");
+}
+
 // The one-pass parser (csv_scan.h) reads numbers as strtod did: signs, exponents, CRLF line
 // ends, quotes and spaces around fields, comment and blank lines, a last line without '\n'.
 TEST(Csv, NumberFormsAndLineEndsAsBefore) {
