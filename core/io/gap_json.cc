@@ -200,11 +200,16 @@ nlohmann::json GapReportToJson(const GapReport& report) {
       {"factors", factors},
       {"summary", w.summary},
   };
+  nlohmann::json glitches = nlohmann::json::array();
+  for (const auto& g : report.glitches)
+    glitches.push_back({{"records", g.records}, {"record", g.record}, {"sample", g.sample},
+                        {"value", g.value}, {"replaced_by", g.replaced_by}});
   return {{"format", "idrig.gap/1"},
           {"verdict", verdict},
           {"ranking", ranking},
           {"where", where},
           {"notes", report.notes},
+          {"glitches", glitches},
           {"estimation_samples", report.estimation_samples},
           {"validation_samples", report.validation_samples}};
 }

@@ -172,8 +172,17 @@ struct GapVerdict {
   std::string explanation;
 };
 
+// An output sample bridged as a glitch before fitting (core/numeric/signal/outliers.h).
+struct GapGlitch {
+  std::string records;   // "estimation" or "validation"
+  int record = 0;        // index among them
+  long sample = 0;
+  double value = 0, replaced_by = 0;
+};
+
 struct GapReport {
   GapVerdict verdict;
+  std::vector<GapGlitch> glitches;    // output glitches bridged before fitting
   std::vector<CandidateFit> ranking;  // best first
   GapWhere where;
   std::vector<std::string> notes;     // what was assumed (e.g. "split in time at 50 %")

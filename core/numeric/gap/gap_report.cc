@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "core/numeric/gap/gap_internal.h"
+#include "core/numeric/signal/outliers.h"
 #include "core/numeric/validation.h"
 
 namespace idrig {
@@ -265,8 +266,43 @@ void SplitRecord(const GapRecord& record, std::vector<GapRecord>& estimation,
   validation.push_back(val);
 }
 
-GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRecord>& estimation_in,
-                      const std::vector<GapRecord>& validation_in, const GapOptions& options) {
+namespace {
+
+// Bridges the output glitches of every record (core/numeric/signal/outliers.h) and says so.
+std::vector<GapRecord> BridgeGlitches(const std::vector<GapRecord>& records, const char* set, GapReport& report) {
+  std::vector<GapRecord> out = records;
+  for (size_t i = 0; i < out.size(); ++i) {
+    GapRecord& r = out[i];
+    if (r.u.size() != r.y.size() || !r.y.allFinite()) continue;  // refused by CheckRecords
+    const GlitchScan scan = BridgeOutputGlitches(r.y, r.u);
+    const std::string name = std::string(set) + " record " + std::to_string(i + 1);
+    if (scan.too_many) {
+      report.notes.push_back(name + ": " + std::to_string(scan.excursions) +
+                             " output samples stand far out of their running median, too many for "
+                             "glitches: left as measured");
+      continue;
+    }
+    if (scan.glitches.empty()) continue;
+    std::string samples;
+    for (const auto& g : scan.glitches) {
+      report.glitches.push_back({set, static_cast<int>(i), g.sample, g.value, g.replaced_by});
+      if (samples.size() < 120) samples += (samples.empty() ? "" : ", ") + std::to_string(g.sample);
+    }
+    report.notes.push_back(name + ": " + std::to_string(scan.glitches.size()) +
+                           (scan.glitches.size() == 1 ? " output sample" : " output samples") +
+                           " far out of the signal (a sensor or acquisition glitch) bridged from "
+                           "their neighbours before fitting, at sample " + samples);
+  }
+  return out;
+}
+
+}  // namespace
+
+GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRecord>& estimation_raw,
+                      const std::vector<GapRecord>& validation_raw, const GapOptions& options) {
+  GapReport report;
+  const std::vector<GapRecord> estimation_in = BridgeGlitches(estimation_raw, "estimation", report);
+  const std::vector<GapRecord> validation_in = BridgeGlitches(validation_raw, "validation", report);
   if (estimation_in.empty()) Fail("no estimation records");
   const double ts = estimation_in.front().sample_time;
   if (!(ts > 0)) Fail("the records' sample time must be positive");
@@ -274,7 +310,6 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const int order = g0.Order();
   const int min_samples = std::max(20, 10 * (order + 4));
 
-  GapReport report;
   std::vector<GapRecord> estimation, validation;
   if (validation_in.empty()) {
     if (estimation_in.size() == 1) {
