@@ -41,6 +41,19 @@ grep -q "first half" <<<"$text" || fail "no note about the split: $text"
 grep -q "^verdict:" <<<"$text" || fail "no verdict line: $text"
 echo "ok: one record split"
 
+# A sensor glitch (one reading 50 output ranges off) is bridged and reported, not diagnosed; a
+# record with a stretch cut out is refused at the jump.
+awk -F, 'NR == 1 { print; next } NR == 901 { print $1 "," $2 "," ($3 + 50); next } { print }' \
+  "$dir/case2-est.csv" > "$dir/glitch.csv"
+out=$("$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/glitch.csv" \
+      --validate "$dir/case2-val.csv" --json) || fail "gap diagnose (glitch) exited with $?"
+jq -e '.verdict.effect == "time_delay" and (.glitches | length) == 1 and .glitches[0].sample == 899
+       and .glitches[0].records == "estimation"' <<<"$out" > /dev/null \
+  || fail "glitch not bridged and reported: $(jq -c '[.verdict.effect, .glitches]' <<<"$out")"
+awk 'NR <= 500 || NR > 700' "$dir/case2-est.csv" > "$dir/spliced.csv"
+expect "not uniform at sample 499: t jumps" "$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/spliced.csv"
+echo "ok: a glitch bridged, a splice refused"
+
 awk -F, 'NR == 1 { print; next } NR == 40 { print $1 "," $2 ",nan"; next } { print }' \
   "$dir/case2-est.csv" > "$dir/nan.csv"
 awk -F, 'NR == 1 { print; next } { print $1 ",0.5," $3 }' "$dir/case2-est.csv" > "$dir/const.csv"
