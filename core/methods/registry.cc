@@ -7,6 +7,7 @@
 #include "core/io/csv.h"
 #include "core/io/model_json.h"
 #include "core/methods/report_checks.h"
+#include "core/numeric/signal/outliers.h"
 
 namespace idrig {
 
@@ -107,15 +108,62 @@ MethodReport RunAboutOperatingPoint(const MethodInfo& info, const IoRecord& reco
   return report;
 }
 
-MethodReport RunOnRecord(const MethodInfo& info, const IoRecord& record, const nlohmann::json& options) {
+// The common option "glitches" (see registry.h): "bridge" (the default) or "keep".
+bool TakeGlitchesOption(nlohmann::json* options) {
+  if (!options->is_object() || !options->contains("glitches")) return true;
+  const nlohmann::json v = (*options)["glitches"];
+  if (v != "bridge" && v != "keep")
+    throw std::invalid_argument("option 'glitches' must be 'bridge' (output samples far out of the signal, "
+                                "a sensor or acquisition fault, bridged from their neighbours) or 'keep', got " +
+                                v.dump());
+  options->erase("glitches");
+  return v == "bridge";
+}
+
+// Bridges the output glitches of every output column (core/numeric/signal/outliers.h); returns
+// them as JSON (empty when none) and says so in `note`.
+nlohmann::json BridgeRecordGlitches(IoRecord* record, std::string* note) {
+  nlohmann::json list = nlohmann::json::array();
+  std::ostringstream text;
+  for (long c = 0; c < record->y.cols(); ++c) {
+    Eigen::VectorXd y = record->y.col(c);
+    const GlitchScan scan = BridgeOutputGlitches(y, record->u);
+    if (scan.glitches.empty()) continue;
+    record->y.col(c) = y;
+    const std::string name =
+        c < static_cast<long>(record->output_names.size()) ? record->output_names[static_cast<size_t>(c)] : "y";
+    text << (list.empty() ? "" : "; ") << name << ": " << scan.glitches.size() << " at sample";
+    int shown = 0;
+    for (const auto& g : scan.glitches) {
+      list.push_back({{"output", name}, {"sample", g.sample}, {"value", g.value}, {"replaced_by", g.replaced_by}});
+      if (shown++ < 8) text << " " << g.sample;
+    }
+  }
+  if (!list.empty())
+    *note = "output samples far out of the signal (a sensor or acquisition glitch) bridged from their "
+            "neighbours before fitting (option glitches=keep fits them as measured): " + text.str();
+  return list;
+}
+
+MethodReport RunOnRecord(const MethodInfo& info, const IoRecord& measured, const nlohmann::json& options) {
   nlohmann::json method_options = options;
   const double min_fit = TakeMinFitOption(&method_options);
   const std::string offsets = TakeOffsetsOption(info, &method_options);
+  IoRecord record = measured;
+  std::string glitch_note;
+  const nlohmann::json glitches =
+      TakeGlitchesOption(&method_options) ? BridgeRecordGlitches(&record, &glitch_note) : nlohmann::json::array();
   MethodInput input;
   input.record = &record;
   MethodReport report = offsets != "none" ? RunAboutOperatingPoint(info, record, method_options, offsets)
                                           : info.run(input, method_options);
-  return Finish(info, std::move(report), record.sample_time, min_fit);
+  report = Finish(info, std::move(report), record.sample_time, min_fit);
+  if (!glitches.empty()) {
+    report.json["glitches"] = glitches;
+    report.json["warnings"].push_back(glitch_note);
+    report.text = "Glitches: " + glitch_note + "\n" + report.text;
+  }
+  return report;
 }
 }  // namespace
 
@@ -129,9 +177,10 @@ MethodReport RunMethod(const std::string& name, const std::string& data_path,
   }
   nlohmann::json method_options = options;
   const double min_fit = TakeMinFitOption(&method_options);
-  if (method_options.is_object() && method_options.contains("offsets"))
-    throw std::invalid_argument("option 'offsets' is for methods that take a time record; '" + name +
-                                "' reads " + data_path + " itself");
+  for (const char* key : {"offsets", "glitches"})
+    if (method_options.is_object() && method_options.contains(key))
+      throw std::invalid_argument("option '" + std::string(key) + "' is for methods that take a time record; '" +
+                                  name + "' reads " + data_path + " itself");
   MethodInput input;
   input.path = data_path;
   return Finish(info, info.run(input, method_options), 0.0, min_fit);

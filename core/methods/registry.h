@@ -48,7 +48,10 @@ const MethodInfo& FindMethod(const std::string& name);
 // removed, the method fits the deviations, and the model carries "operating_point", so that
 // y = y0 + G(u − u0); model_json.h) or "initial" (the same about the rig at rest when the
 // record starts: a step test from a set point; io_record.h InitialRest). The method auto also takes "auto", its default: both,
-// chosen on its held-out folds when the record's means stand out (auto_method.h).
+// chosen on its held-out folds when the record's means stand out (auto_method.h). So is
+// "glitches" for those methods: "bridge" (the default: output samples far out of the signal, a
+// sensor or acquisition fault, are bridged from their neighbours before the method runs, and
+// listed under "glitches" and in "warnings"; core/numeric/signal/outliers.h) or "keep".
 MethodReport RunMethod(const std::string& name, const std::string& data_path,
                        const nlohmann::json& options);
 MethodReport RunMethod(const std::string& name, const IoRecord& record,

@@ -27,6 +27,7 @@ csv_from() {
   if [ "$ref" != "self" ]; then read -r um ym < "$ref.mean"; fi
   awk -F, -v uc="$ucol" -v yc="$ycol" -v a="$first" -v b="$last" -v s="$step" -v ts="$ts" \
       -v um="$um" -v ym="$ym" -v self="$ref" -v meanfile="$out.mean" '
+    BEGIN { n = 0 }  # an unset n indexes u[""], and sample 0 read back as 0 (a glitch)
     NR == 1 { next }
     { r = NR - 1 }
     r >= a && r <= b && (r - a) % s == 0 && $uc != "" { u[n] = $uc; y[n] = $yc; n++ }

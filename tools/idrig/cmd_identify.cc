@@ -53,7 +53,7 @@ nlohmann::json ParseFrequencies(const std::string& text) {
 
 void RegisterIdentifyCommand(CLI::App& app) {
   struct Args {
-    std::string data, method = "auto", options_json, frequencies, u_names, y_names, offsets, time_name;
+    std::string data, method = "auto", options_json, frequencies, u_names, y_names, offsets, time_name, glitches;
     int order = 0;
     double ts = 0.0;
     std::vector<std::string> options;
@@ -83,6 +83,10 @@ void RegisterIdentifyCommand(CLI::App& app) {
                   "starts: a step test from a set point), auto (method auto only, its default: none and mean, "
                   "chosen on held-out data when the means stand out)")
       ->check(CLI::IsMember({"none", "mean", "initial", "auto"}));
+  cmd->add_option("--glitches", args->glitches,
+                  "bridge (default: output samples far out of the signal, a sensor or acquisition glitch, are "
+                  "bridged from their neighbours before fitting and listed under \"glitches\") or keep")
+      ->check(CLI::IsMember({"bridge", "keep"}));
   cmd->add_flag("--json", args->json, "print the model as idrig.model/1 JSON (with an \"identification\" report)");
   cmd->callback([args, frequencies] {
     nlohmann::json options = args->options_json.empty()
@@ -93,6 +97,7 @@ void RegisterIdentifyCommand(CLI::App& app) {
                                   args->options_json + "'");
     if (args->order > 0) options["order"] = args->order;
     if (!args->offsets.empty()) options["offsets"] = args->offsets;
+    if (!args->glitches.empty()) options["glitches"] = args->glitches;
     for (const auto& kv : args->options) {
       const auto eq = kv.find('=');
       if (eq == std::string::npos || eq == 0)

@@ -42,7 +42,7 @@ double Span(const Eigen::VectorXd& x) {
 
 }  // namespace
 
-GlitchScan BridgeOutputGlitches(Eigen::VectorXd& y, const Eigen::VectorXd& u) {
+GlitchScan BridgeOutputGlitches(Eigen::VectorXd& y, const Eigen::MatrixXd& inputs) {
   GlitchScan scan;
   const long n = y.size();
   if (n < 4 * kHalfWindow) return scan;
@@ -54,19 +54,21 @@ GlitchScan BridgeOutputGlitches(Eigen::VectorXd& y, const Eigen::VectorXd& u) {
   if (!(span > 0)) return scan;
   const double threshold = std::max(kScaleMultiple * scale, kSpanShare * span);
 
-  // An isolated input excursion at t or t − 1 may be what the output shows at t.
+  // An isolated input excursion at t or t − 1 may be what the output shows at t. Measured
+  // against the input's whole range: its isolated pulses are what this looks for, so they must
+  // not fall outside the span they are measured against (the output's span leaves its glitches out).
   std::vector<bool> input_event(static_cast<size_t>(n), false);
-  if (u.size() == n) {
-    // The input's whole range: its isolated pulses are what this looks for, so they must not
-    // fall outside the span they are measured against (the output's span leaves its glitches out).
-    const Eigen::VectorXd ru = RunningMedianResidual(u);
-    const double u_span = u.maxCoeff() - u.minCoeff();
-    for (long t = 0; t < n; ++t)
-      if (u_span > 0 && std::abs(ru(t)) > kSpanShare * u_span) {
-        input_event[static_cast<size_t>(t)] = true;
-        if (t + 1 < n) input_event[static_cast<size_t>(t + 1)] = true;
-      }
-  }
+  if (inputs.rows() == n)
+    for (long c = 0; c < inputs.cols(); ++c) {
+      const Eigen::VectorXd u = inputs.col(c);
+      const Eigen::VectorXd ru = RunningMedianResidual(u);
+      const double u_span = u.maxCoeff() - u.minCoeff();
+      for (long t = 0; t < n; ++t)
+        if (u_span > 0 && std::abs(ru(t)) > kSpanShare * u_span) {
+          input_event[static_cast<size_t>(t)] = true;
+          if (t + 1 < n) input_event[static_cast<size_t>(t + 1)] = true;
+        }
+    }
   std::vector<bool> marked(static_cast<size_t>(n), false);
   for (long t = 0; t < n; ++t)
     if (std::abs(r(t)) > threshold && !input_event[static_cast<size_t>(t)]) {

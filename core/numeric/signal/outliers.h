@@ -33,7 +33,8 @@ struct GlitchScan {
   bool too_many = false; // excursions > the rarity limit: left as measured
 };
 
-// Finds the glitches of y (input u of equal length, or empty) and bridges them in y.
-GlitchScan BridgeOutputGlitches(Eigen::VectorXd& y, const Eigen::VectorXd& u);
+// Finds the glitches of y and bridges them in y. `inputs`: the record's inputs (one column
+// each, as many rows as y), or empty.
+GlitchScan BridgeOutputGlitches(Eigen::VectorXd& y, const Eigen::MatrixXd& inputs);
 
 }  // namespace idrig

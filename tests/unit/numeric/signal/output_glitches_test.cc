@@ -99,7 +99,7 @@ TEST(OutputGlitches, FeedthroughPulsesAndFrequentExcursionsAreNotGlitches) {
   Eigen::VectorXd y2 = Eigen::VectorXd::Zero(n);
   for (long t = 0; t < n; t += 97) y2(t) = 1.0;  // 21 spikes in 2000 samples: > 0.2 %
   const Eigen::VectorXd before = y2;
-  scan = BridgeOutputGlitches(y2, Eigen::VectorXd());
+  scan = BridgeOutputGlitches(y2, Eigen::MatrixXd());
   EXPECT_TRUE(scan.glitches.empty());
   EXPECT_TRUE(scan.too_many);
   EXPECT_EQ(scan.excursions, 21);
