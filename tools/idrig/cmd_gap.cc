@@ -1,6 +1,7 @@
-// idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--json]
+// idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--glitches bridge|keep] [--json]
 // idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--ts S] [--jobs J] [--offsets] [--combos F]
-//                 [--excitation K] [--integrating] [--plants zeros|two-mass] [--damping LO,HI] [--noise-pole A] [--dump DIR] [--json]
+//                 [--excitation K] [--integrating] [--plants zeros|two-mass] [--damping LO,HI] [--noise-pole A]
+//                 [--add-glitches N] [--glitches bridge|keep] [--dump DIR] [--json]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -70,7 +71,8 @@ struct BenchSettings {
   double snr = 30, combos = 0, noise_pole = 0;
   std::vector<double> damping = {0.15, 0.8};
   bool json = false, offsets = false, integrating = false;
-  std::string dump, excitation, plants;
+  int add_glitches = 0;
+  std::string dump, excitation, plants, glitches = "bridge";
   std::vector<std::string> only;  // keep the cases that withhold one of these effects
 };
 
@@ -92,6 +94,7 @@ GapCaseOptions CaseOptions(const BenchSettings& b) {
   options.zeta_max = b.damping.at(1);
   options.noise_pole = b.noise_pole;
   options.plants = b.plants;
+  options.glitches = b.add_glitches;
   return options;
 }
 
@@ -131,6 +134,7 @@ void RunBench(const BenchSettings& b) {
       const auto start = std::chrono::steady_clock::now();
       GapOptions diagnosis;
       diagnosis.threads = 1;  // the cases run in parallel instead
+      diagnosis.bridge_glitches = b.glitches == "bridge";
       const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, diagnosis);
       GapBenchOutcome& o = outcomes[slot];
       o.truth = truth;
@@ -160,6 +164,7 @@ void RunBench(const BenchSettings& b) {
                           {"offsets", b.offsets}, {"combos", b.combos},
                           {"integrating", b.integrating}, {"excitation", b.excitation},
                           {"damping", b.damping}, {"noise_pole", b.noise_pole}, {"plants", b.plants}, {"only", b.only},
+                          {"add_glitches", b.add_glitches}, {"glitches", b.glitches},
                           {"single_cases", s.single_cases},
                           {"top1_accuracy", s.top1_accuracy}, {"false_alarm_rate", s.false_alarm_rate},
                           {"single_extra_effect", s.single_extra},
@@ -181,7 +186,9 @@ void RunBench(const BenchSettings& b) {
   }
   std::cout << std::setprecision(3) << "cases " << b.cases << ", seed " << b.seed << ", SNR " << b.snr
             << " dB, " << b.samples << " samples per record at Ts " << b.sample_time << " s"
-            << (b.offsets ? ", actuator and sensor offsets" : "") << ", two-effect share " << b.combos
+            << (b.offsets ? ", actuator and sensor offsets" : "")
+            << (b.add_glitches ? ", " + std::to_string(b.add_glitches) + " glitches per record (" + b.glitches + ")" : "")
+            << ", two-effect share " << b.combos
             << "\n"
             << "top-1 accuracy on single effects " << Rate(s.single_correct, s.single_cases) << "\n"
             << "false alarms on none " << Rate(s.false_alarms, s.none_cases) << "\n";
@@ -220,7 +227,7 @@ void RegisterGapCommand(CLI::App& app) {
   struct DiagnoseArgs {
     std::string sim;
     std::vector<std::string> data, validate;
-    std::string plots, u_name, y_name, time_name;
+    std::string plots, u_name, y_name, time_name, glitches = "bridge";
     bool json = false;
   };
   auto d = std::make_shared<DiagnoseArgs>();
@@ -233,6 +240,10 @@ void RegisterGapCommand(CLI::App& app) {
   diagnose->add_option("--u", d->u_name, "the input column of records with their own column names (default: u)");
   diagnose->add_option("--y", d->y_name, "the output column (default: y)");
   diagnose->add_option("--time", d->time_name, "the time column (default: t or time)");
+  diagnose->add_option("--glitches", d->glitches,
+                       "bridge (default: output samples far out of the signal, a sensor or acquisition glitch, are "
+                       "bridged from their neighbours before fitting and listed under \"glitches\") or keep")
+      ->check(CLI::IsMember({"bridge", "keep"}));
   diagnose->add_flag("--json", d->json, "print the report as JSON (idrig.gap/1)");
   diagnose->add_option("--plots", d->plots, "also write SVG plots of the gap (frequency, amplitude, state, time, ranking) into this directory");
   diagnose->callback([d] {
@@ -246,7 +257,9 @@ void RegisterGapCommand(CLI::App& app) {
     auto read = [&](const std::string& path) { return named ? ReadIoRecordCsv(path, columns) : ReadIoRecordCsv(path); };
     for (const auto& p : d->data) estimation.push_back(ToGapRecord(read(p)));
     for (const auto& p : d->validate) validation.push_back(ToGapRecord(read(p)));
-    const GapReport report = DiagnoseGap(sim, estimation, validation);
+    GapOptions options;
+    options.bridge_glitches = d->glitches == "bridge";
+    const GapReport report = DiagnoseGap(sim, estimation, validation, options);
     nlohmann::json out = GapReportToJson(report);
     out["sim"] = d->sim;
     out["data"] = d->data;
@@ -337,6 +350,13 @@ void RegisterGapCommand(CLI::App& app) {
                   "(10–100 % of the output range) on every case");
   bench->add_option("--combos", b->combos,
                     "share F in [0, 1] of the cases with two effects that occur together on rigs");
+  bench->add_option("--add-glitches", b->add_glitches,
+                    "sensor or acquisition glitches per record: runs of 1-3 samples, a spike 2-20 output spans off, "
+                    "a dropout to zero or a reading stuck beyond the range")
+      ->check(CLI::Range(0, 1000));
+  bench->add_option("--glitches", b->glitches,
+                    "bridge (default: output glitches bridged before fitting, as gap diagnose does) or keep")
+      ->check(CLI::IsMember({"bridge", "keep"}));
   bench->callback([b] { RunBench(*b); });
 }
 

@@ -368,6 +368,22 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Eff
   return y;
 }
 
+void AddGlitches(Eigen::VectorXd& y, int count, std::mt19937_64& rng) {
+  if (count <= 0 || y.size() < 40) return;
+  const double lo = y.minCoeff(), hi = y.maxCoeff(), span = std::max(hi - lo, 1e-12);
+  for (int g = 0; g < count; ++g) {
+    const long length = 1 + static_cast<long>(Uniform(rng, 0, 3));  // 1–3 samples
+    const long at = static_cast<long>(Uniform(rng, 10, static_cast<double>(y.size() - 10 - length)));
+    const double kind = Uniform(rng, 0, 1);
+    // A spike 2–20 output spans off (either sign), a dropout to zero (a sensor offset makes it a
+    // jump), or a reading stuck at a rail one span beyond the range.
+    const double value = kind < 0.4   ? y(at) + (Uniform(rng, 0, 1) < 0.5 ? -1 : 1) * Uniform(rng, 2, 20) * span
+                         : kind < 0.7 ? 0.0
+                                      : hi + span;
+    for (long k = at; k < at + length; ++k) y(k) = value;
+  }
+}
+
 GapCase MakeGapCase(EffectKind truth, std::mt19937_64& rng, const GapCaseOptions& options) {
   return MakeGapCase(std::vector<EffectKind>{truth}, rng, options);
 }
@@ -380,6 +396,7 @@ void ValidateGapCaseOptions(const GapCaseOptions& o) {
     throw std::invalid_argument("gap case: noise pole " + std::to_string(o.noise_pole) + " is not in [0, 1)");
   if (!o.plants.empty() && o.plants != "zeros" && o.plants != "two-mass")
     throw std::invalid_argument("gap case: plant family '" + o.plants + "' is not one of zeros, two-mass");
+  if (o.glitches < 0) throw std::invalid_argument("gap case: a negative number of glitches");
   if (!o.plants.empty() && o.integrating)
     throw std::invalid_argument("gap case: a plant family and --integrating are two plant choices; give one");
 }
@@ -467,6 +484,8 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
   c.validation.u = u_val;
   c.validation.y = record(u_val, c.noise_sigma, rng);
   c.validation.sample_time = options.sample_time;
+  // Sensor or acquisition glitches, drawn last so that the rest of the case does not move.
+  for (GapRecord* r : {&c.estimation, &c.validation}) AddGlitches(r->y, options.glitches, rng);
   return c;
 }
 

@@ -48,7 +48,13 @@ struct GapCaseOptions {
   // flexible arm's tip), or "two-mass" (force on one mass, position of the other through a
   // spring: a fourth-order plant with a resonance, with or without an antiresonance).
   std::string plants;
+  // Sensor or acquisition glitches per record (a run of 1–3 samples each: a spike 2–20 output
+  // spans off, a dropout to zero, or a reading stuck one span beyond the range), added last.
+  int glitches = 0;
 };
+
+// Adds `count` glitches (as GapCaseOptions::glitches) to y.
+void AddGlitches(Eigen::VectorXd& y, int count, std::mt19937_64& rng);
 
 struct GapCase {
   EffectKind truth = EffectKind::kNone;   // the first (or only) withheld effect

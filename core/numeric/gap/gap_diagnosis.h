@@ -58,6 +58,9 @@ struct GapOptions {
   // shooting) and whether G0 integrates. The diagnosis on a higher-order linear part keeps the
   // scheme of the diagnosis that found it, so that their NRMSEs and BICs compare.
   long fixed_segment = -1;       // -1: chosen from G0 (ChooseFitScheme)
+  // Output glitches (core/numeric/signal/outliers.h) bridged before fitting; false: the records
+  // are fitted as measured.
+  bool bridge_glitches = true;
   bool fixed_integrating = false;
 };
 

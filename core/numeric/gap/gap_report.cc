@@ -277,8 +277,9 @@ std::vector<GapRecord> BridgeGlitches(const std::vector<GapRecord>& records, con
     const GlitchScan scan = BridgeOutputGlitches(r.y, r.u);
     const std::string name = std::string(set) + " record " + std::to_string(i + 1);
     if (scan.too_many) {
-      report.notes.push_back(name + ": " + std::to_string(scan.excursions) +
-                             " output samples stand far out of their running median, too many for "
+      report.notes.push_back(name + ": " + std::to_string(scan.excursions) + " output samples in " +
+                             std::to_string(scan.events) +
+                             " runs stand far out of their running median, too many for "
                              "glitches: left as measured");
       continue;
     }
@@ -301,8 +302,10 @@ std::vector<GapRecord> BridgeGlitches(const std::vector<GapRecord>& records, con
 GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRecord>& estimation_raw,
                       const std::vector<GapRecord>& validation_raw, const GapOptions& options) {
   GapReport report;
-  const std::vector<GapRecord> estimation_in = BridgeGlitches(estimation_raw, "estimation", report);
-  const std::vector<GapRecord> validation_in = BridgeGlitches(validation_raw, "validation", report);
+  const std::vector<GapRecord> estimation_in =
+      options.bridge_glitches ? BridgeGlitches(estimation_raw, "estimation", report) : estimation_raw;
+  const std::vector<GapRecord> validation_in =
+      options.bridge_glitches ? BridgeGlitches(validation_raw, "validation", report) : validation_raw;
   if (estimation_in.empty()) Fail("no estimation records");
   const double ts = estimation_in.front().sample_time;
   if (!(ts > 0)) Fail("the records' sample time must be positive");

@@ -170,6 +170,7 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
   const std::string current = v.effects.size() > 1 ? v.effect + " + " + EffectName(v.effects[1].kind) : v.effect;
   GapOptions inner_options = *ctx.options;
   inner_options.check_linear_order = false;
+  inner_options.bridge_glitches = false;  // bridged already
   // The same fit scheme as here (the part of order n0 + 2 may decay faster than G0, and would get
   // single shooting): its NRMSEs and BICs are compared with this diagnosis's.
   inner_options.fixed_segment = ctx.nuisance.segment;

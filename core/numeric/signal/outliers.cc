@@ -76,8 +76,12 @@ GlitchScan BridgeOutputGlitches(Eigen::VectorXd& y, const Eigen::MatrixXd& input
       ++scan.excursions;
     }
   if (scan.excursions == 0) return scan;
+  // Rarity counts events (runs of marked samples), not samples: a glitch of three samples is one
+  // fault, and three such faults in 4000 samples are still rare.
+  for (long t = 0; t < n; ++t)
+    if (marked[static_cast<size_t>(t)] && (t == 0 || !marked[static_cast<size_t>(t - 1)])) ++scan.events;
   const long limit = std::max<long>(2, static_cast<long>(0.002 * static_cast<double>(n)));
-  if (scan.excursions > limit) {
+  if (scan.events > limit || scan.excursions > kHalfWindow * limit) {
     scan.too_many = true;
     return scan;
   }

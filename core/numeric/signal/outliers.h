@@ -13,8 +13,9 @@
 // dynamics a sampled rig output shows move far less than a quarter of its range away from their
 // own running median and straight back. It is not a glitch when the input has an isolated
 // excursion (against the input's whole range) at t or t − 1: a one-sample input pulse may drive
-// a direct-feedthrough output there. Nothing is marked when the marks exceed max(2, 0.2 % of
-// the samples): then the excursions are the record's character, not faults. Marked samples are
+// a direct-feedthrough output there. Nothing is marked when the runs of marks (events) exceed
+// max(2, 0.2 % of the samples), or the marked samples 5 times that: then the excursions are the
+// record's character, not faults. Marked samples are
 // bridged linearly between their unmarked neighbours, and every one is reported.
 #include <Eigen/Dense>
 #include <vector>
@@ -30,7 +31,8 @@ struct OutputGlitch {
 struct GlitchScan {
   std::vector<OutputGlitch> glitches;  // bridged (empty when none or when too many)
   long excursions = 0;   // samples that passed the size rule before the rarity rule
-  bool too_many = false; // excursions > the rarity limit: left as measured
+  long events = 0;       // runs of such samples
+  bool too_many = false; // events (or samples) beyond the rarity limit: left as measured
 };
 
 // Finds the glitches of y and bridges them in y. `inputs`: the record's inputs (one column

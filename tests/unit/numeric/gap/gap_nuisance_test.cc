@@ -526,8 +526,11 @@ TEST(GapOffsetTest, APairIsAlsoReachedFromItsOtherEffect) {
   ASSERT_EQ(named.size(), 2u);
   EXPECT_NE(std::find(named.begin(), named.end(), "coulomb_friction"), named.end());
   EXPECT_NE(std::find(named.begin(), named.end(), "input_saturation"), named.end());
-  for (const Effect& e : report.verdict.effects)
-    if (e.kind == EffectKind::kCoulombFriction) EXPECT_NEAR(e.params[0], c.effects[0].params[0], 0.05 * c.effects[0].params[0]);
+  for (const Effect& e : report.verdict.effects) {
+    if (e.kind == EffectKind::kCoulombFriction) {
+      EXPECT_NEAR(e.params[0], c.effects[0].params[0], 0.05 * c.effects[0].params[0]);
+    }
+  }
   EXPECT_LT(report.verdict.nrmse_after, 0.5 * 0.33);
   EXPECT_TRUE(std::any_of(report.notes.begin(), report.notes.end(), [](const std::string& n) {
     return n.find("the best pair's other effect as the first") != std::string::npos;

@@ -78,8 +78,11 @@ TEST(OutputGlitches, SpikesDropoutsAndShortBurstsAreBridged) {
   // Bridged: within a few noise sigmas of the clean signal (which is smooth there).
   for (long t : {700L, 1520L, 2200L, 2201L, 2202L}) EXPECT_NEAR(y(t), clean(t), 0.06) << t;
   // Everything else untouched.
-  for (long t = 0; t < n; ++t)
-    if (t != 700 && t != 1520 && (t < 2200 || t > 2202)) ASSERT_EQ(y(t), clean(t)) << t;
+  for (long t = 0; t < n; ++t) {
+    if (t != 700 && t != 1520 && (t < 2200 || t > 2202)) {
+      ASSERT_EQ(y(t), clean(t)) << t;
+    }
+  }
 }
 
 // An output that responds within the sample to a one-sample input pulse (direct feedthrough)
@@ -103,7 +106,60 @@ TEST(OutputGlitches, FeedthroughPulsesAndFrequentExcursionsAreNotGlitches) {
   EXPECT_TRUE(scan.glitches.empty());
   EXPECT_TRUE(scan.too_many);
   EXPECT_EQ(scan.excursions, 21);
+  EXPECT_EQ(scan.events, 21);
   EXPECT_EQ(y2, before);
+}
+
+// The bench's injected glitches (gap bench --add-glitches: runs of 1–3 samples, spikes, dropouts,
+// readings stuck beyond the range) on its rig records: every injected sample at least half the
+// output's range off is found, and nothing that was not injected is touched (a dropout to zero
+// where the signal is near zero is no gross glitch and may stay). Three three-sample runs in
+// 4000 samples are three events, within the rarity limit of 8, though their 9 samples are not.
+TEST(OutputGlitches, TheBenchsInjectedGlitchesAreFoundAndNothingElse) {
+  int runs_checked = 0;
+  for (int index = 0; index < 13; ++index) {
+    std::mt19937_64 rng(BenchCaseSeed(731, index));
+    GapCaseOptions options;
+    options.offsets = true;
+    options.samples = 4000;
+    GapCase c = MakeGapCase(BenchCaseTruth(index, 0.0), rng, options);
+    Eigen::VectorXd y = c.estimation.y;
+    const Eigen::VectorXd clean = y;
+    AddGlitches(y, 3, rng);
+    const Eigen::VectorXd measured = y;
+    const double range = clean.maxCoeff() - clean.minCoeff();
+    const GlitchScan scan = BridgeOutputGlitches(y, c.estimation.u);
+    ASSERT_FALSE(scan.too_many) << "case " << index << ": " << scan.events << " events";
+    std::vector<bool> marked(static_cast<size_t>(y.size()), false);
+    for (const OutputGlitch& g : scan.glitches) {
+      marked[static_cast<size_t>(g.sample)] = true;
+      EXPECT_NE(g.value, clean(g.sample)) << "case " << index << ": sample " << g.sample << " was not injected";
+    }
+    for (long t = 0; t < y.size(); ++t) {
+      if (std::abs(measured(t) - clean(t)) > 0.5 * range) {
+        EXPECT_TRUE(marked[static_cast<size_t>(t)]) << "case " << index << ": gross glitch at " << t << " missed";
+      }
+      if (!marked[static_cast<size_t>(t)]) {
+        ASSERT_EQ(y(t), measured(t)) << "case " << index << " sample " << t;
+      }
+    }
+    ++runs_checked;
+  }
+  EXPECT_EQ(runs_checked, 13);
+
+  // Three bursts of three samples in 4000 samples.
+  const long n = 4000;
+  Eigen::VectorXd u(n), y(n);
+  for (long t = 0; t < n; ++t) {
+    u(t) = (t / 200) % 2 ? 1.0 : -1.0;
+    y(t) = std::sin(0.004 * t) + 0.2 * u(t);
+  }
+  for (long start : {500L, 1800L, 3100L})
+    for (long t = start; t < start + 3; ++t) y(t) = 30.0;
+  const GlitchScan scan = BridgeOutputGlitches(y, u);
+  EXPECT_FALSE(scan.too_many);
+  EXPECT_EQ(scan.events, 3);
+  EXPECT_EQ(scan.glitches.size(), 9u);
 }
 
 }  // namespace
