@@ -50,6 +50,13 @@ out=$("$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/glitch.csv"
 jq -e '.verdict.effect == "time_delay" and (.glitches | length) == 1 and .glitches[0].sample == 899
        and .glitches[0].records == "estimation"' <<<"$out" > /dev/null \
   || fail "glitch not bridged and reported: $(jq -c '[.verdict.effect, .glitches]' <<<"$out")"
+out=$("$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/glitch.csv" \
+      --validate "$dir/case2-val.csv" --glitches keep --json) || fail "gap diagnose --glitches keep exited with $?"
+jq -e '(.glitches | length) == 0' <<<"$out" > /dev/null || fail "--glitches keep still bridged: $(jq -c .glitches <<<"$out")"
+expect "glitches" "$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/glitch.csv" --glitches drop
+"$idrig" gap bench --cases 1 --seed 4 --samples 600 --add-glitches 2 --glitches keep --json > "$dir/gl.json" 2>/dev/null \
+  || fail "gap bench --add-glitches exited with $?"
+jq -e '.add_glitches == 2 and .glitches == "keep"' "$dir/gl.json" > /dev/null || fail "bench JSON lacks add_glitches/glitches"
 awk 'NR <= 500 || NR > 700' "$dir/case2-est.csv" > "$dir/spliced.csv"
 expect "not uniform at sample 499: t jumps" "$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/spliced.csv"
 echo "ok: a glitch bridged, a splice refused"
