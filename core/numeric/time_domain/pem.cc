@@ -286,6 +286,10 @@ Eigen::VectorXd FilterPolynomial(const Eigen::VectorXd& num, const Eigen::Vector
 }
 
 Eigen::VectorXd SimulatePem(const PemResult& result, const Eigen::MatrixXd& u) {
+  if (result.a.size() == 0 || static_cast<long>(result.b.size()) != u.cols() ||
+      static_cast<long>(result.f.size()) != u.cols())
+    Fail(std::string("cannot simulate a ") + ToString(result.structure) + " result without its polynomials for " +
+         std::to_string(u.cols()) + " input(s)" + (result.ok() ? "" : " (the fit failed: " + result.message + ")"));
   Polys p;
   p.a = result.a;
   p.b = result.b;
@@ -339,10 +343,14 @@ PemResult IdentifyPem(const IoRecord& record, const PemOptions& options) {
       sub.order = k;
       if (3 * MakeLayout(sub, k, nu).Size() > split) break;
       PemResult r = IdentifyPem(head, sub);
-      const Eigen::VectorXd sim = SimulatePem(r, record.u);
-      const long tail = record.NumSamples() - split;
-      double e = Nrmse(y.tail(tail), sim.tail(tail))(0);
-      if (!std::isfinite(e) || !r.ok()) e = std::numeric_limits<double>::infinity();
+      double e = std::numeric_limits<double>::infinity();
+      // A failed order (no start gave a stable model) has no polynomials to simulate.
+      if (r.ok()) {
+        const Eigen::VectorXd sim = SimulatePem(r, record.u);
+        const long tail = record.NumSamples() - split;
+        e = Nrmse(y.tail(tail), sim.tail(tail))(0);
+        if (!std::isfinite(e)) e = std::numeric_limits<double>::infinity();
+      }
       nrmse.push_back(e);
       best = std::min(best, e);
       result.order_table.push_back({k, 100.0 * (1.0 - e)});

@@ -129,6 +129,21 @@ TEST(Pem, OrderIsChosenOnHeldOutData) {
   EXPECT_LT(testing::MaxPoleDistance(Poles(plant), Poles(r.model)), 0.01);
 }
 
+// A failed fit (no start gave a stable model) has no polynomials. Simulating it is refused with
+// the reason; the order search skips such an order (before, it simulated the empty result and
+// crashed: armax with its order chosen on DaISy's robot_arm, ballbeam and exchanger records,
+// whose order 5 fails).
+TEST(Pem, AFailedFitIsNotSimulated) {
+  PemResult failed;
+  failed.structure = PemStructure::kArmax;
+  failed.status = SolverStatus::kFailed;
+  failed.message = "armax: no start gave a stable model";
+  const Eigen::MatrixXd u = testing::RandomBinary(50, 1, 1, 3);
+  const std::string message = testing::InvalidArgumentMessage([&] { SimulatePem(failed, u); });
+  EXPECT_NE(message.find("without its polynomials"), std::string::npos) << message;
+  EXPECT_NE(message.find("no start gave a stable model"), std::string::npos) << message;
+}
+
 TEST(Pem, BadInputIsRejectedWithAMessage) {
   const Eigen::MatrixXd u = testing::RandomBinary(300, 2, 1, 5);
   const Eigen::VectorXd y = u.col(0) + u.col(1);
