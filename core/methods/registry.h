@@ -43,8 +43,10 @@ const MethodInfo& FindMethod(const std::string& name);
 // Reads the record when the method needs one, runs it, adds "method" to the report, and checks
 // the model (unstable, pole at Nyquist, poor fit: report_checks.h), which may lower "status"
 // and adds "warnings". The option min_fit_percent (default 50) is taken by RunMethod itself,
-// and so is "offsets" for every method that takes a time record: "none" (the default: y = G u,
-// as recorded), "mean" (a rig run about an operating point: the record's means (u0, y0) are
+// and so is "offsets" for every method that takes a time record: "none" (y = G u, as recorded;
+// the default where the record's means do not stand out; arx, arx-oe, oe, n4sid, armax and bj
+// given no offsets on a record whose means stand out choose among none, mean and initial on
+// held-out data and report it under "offsets"), "mean" (a rig run about an operating point: the record's means (u0, y0) are
 // removed, the method fits the deviations, and the model carries "operating_point", so that
 // y = y0 + G(u − u0); model_json.h) or "initial" (the same about the rig at rest when the
 // record starts: a step test from a set point; io_record.h InitialRest). The method auto also takes "auto", its default: both,

@@ -81,7 +81,9 @@ void RegisterIdentifyCommand(CLI::App& app) {
                   "operating point: none (the record as it is), mean (fit the deviations about the record's means; "
                   "the model carries them as \"operating_point\"), initial (about the rig at rest when the record "
                   "starts: a step test from a set point), auto (method auto only, its default: none and mean, "
-                  "chosen on held-out data when the means stand out)")
+                  "chosen on held-out data when the means stand out). Not given: arx, arx-oe, oe, n4sid, armax "
+                  "and bj choose among none, mean and initial on held-out data when the means stand out "
+                  "(\"offsets\" in the report); other methods take the record as it is")
       ->check(CLI::IsMember({"none", "mean", "initial", "auto"}));
   cmd->add_option("--glitches", args->glitches,
                   "bridge (default: output samples far out of the signal, a sensor or acquisition glitch, are "
