@@ -216,8 +216,15 @@ MethodReport RunChoosingOperatingPoint(const MethodInfo& info, const IoRecord& r
     << split << ":";
   for (auto it = fits.begin(); it != fits.end(); ++it)
     t << " " << it.key() << " " << (it.value().is_number() ? std::to_string(it.value().get<double>()) + " %" : "-");
-  t << "; --offsets none|mean|initial fixes it)";
-  report.text = t.str() + "\n" + report.text;
+  t << "; --offsets none|mean|initial fixes it)\n";
+  // After the warnings, which lead the text.
+  size_t at = 0;
+  while (report.text.compare(at, 8, "warning:") == 0) {
+    const size_t end = report.text.find('\n', at);
+    if (end == std::string::npos) break;
+    at = end + 1;
+  }
+  report.text.insert(at, t.str());
   return report;
 }
 
