@@ -62,6 +62,19 @@ run() {  # run NAME FILE UCOL YCOL TS
     "$(fit "$work/whole.csv" "$work/s-auto.csv" 0)" "$chosen"
 }
 
+# fit_of METHOD TAG [ARGS…]: identify on the first half, simulate the whole record, fit on the
+# second half ("fail" when either step fails); the model is left in $work/e-TAG.json.
+fit_of() {
+  local m="$1" tag="$2"
+  shift 2
+  if "$idrig" identify --data "$work/est.csv" --method "$m" "$@" --json > "$work/e-$tag.json" 2>/dev/null &&
+     "$idrig" simulate --model "$work/e-$tag.json" --data "$work/whole.csv" --out "$work/es-$tag.csv" 2>/dev/null; then
+    fit "$work/whole.csv" "$work/es-$tag.csv" 0
+  else
+    echo fail
+  fi
+}
+
 # explicit NAME FILE UCOL YCOL TS: each black-box method named explicitly, as-is (--offsets none)
 # and given no offsets (chosen among none, mean and initial when the means stand out).
 explicit() {
@@ -69,32 +82,17 @@ explicit() {
   prepare "$daisy/$2" "$3" "$4" "$5"
   local line="$1" m
   for m in arx arx-oe oe n4sid armax bj; do
-    local as_is="fail" given="fail" chosen
-    if "$idrig" identify --data "$work/est.csv" --method "$m" --offsets none --json > "$work/e-none.json" 2>/dev/null &&
-       "$idrig" simulate --model "$work/e-none.json" --data "$work/whole.csv" --out "$work/es-none.csv" 2>/dev/null; then
-      as_is=$(fit "$work/whole.csv" "$work/es-none.csv" 0)
-    fi
-    if "$idrig" identify --data "$work/est.csv" --method "$m" --json > "$work/e-def.json" 2>/dev/null &&
-       "$idrig" simulate --model "$work/e-def.json" --data "$work/whole.csv" --out "$work/es-def.csv" 2>/dev/null; then
-      given=$(fit "$work/whole.csv" "$work/es-def.csv" 0)
-    fi
+    local as_is given chosen
+    as_is=$(fit_of "$m" none --offsets none)
+    given=$(fit_of "$m" def)
     chosen=$(python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))["identification"].get("offsets", {}).get("chosen", "-"))' "$work/e-def.json" 2>/dev/null || echo "-")
     line+=$(printf "  %s %s→%s (%s)" "$m" "$as_is" "$given" "$chosen")
   done
   echo "$line"
 }
 
-run dryer dryer.dat 1 2 0.08
-run ballbeam ballbeam.dat 1 2 0.1
-run exchanger exchanger.dat 2 3 1
-run robot_arm robot_arm.dat 1 2 1
-run flutter flutter.dat 1 2 1
-run cd_player CD_player_arm.dat 1 3 1
-
+records=("dryer dryer.dat 1 2 0.08" "ballbeam ballbeam.dat 1 2 0.1" "exchanger exchanger.dat 2 3 1"
+         "robot_arm robot_arm.dat 1 2 1" "flutter flutter.dat 1 2 1" "cd_player CD_player_arm.dat 1 3 1")
+for r in "${records[@]}"; do run $r; done
 echo "explicit methods: as-is (--offsets none) → given no offsets (chosen)"
-explicit dryer dryer.dat 1 2 0.08
-explicit ballbeam ballbeam.dat 1 2 0.1
-explicit exchanger exchanger.dat 2 3 1
-explicit robot_arm robot_arm.dat 1 2 1
-explicit flutter flutter.dat 1 2 1
-explicit cd_player CD_player_arm.dat 1 3 1
+for r in "${records[@]}"; do explicit $r; done
