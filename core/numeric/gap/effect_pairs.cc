@@ -71,6 +71,15 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
         (k != EffectKind::kOutputQuantization || ctx.q_strength >= kLatticeStrength) &&
         !(two_valued && input_static(k)))
       seconds.push_back(k);
+  // A resonance as the second effect must act through the input (gap_report.cc): when what the
+  // first effect leaves on the validation records does not follow the input, a mode with a free
+  // initial state would only reproduce an output disturbance (a hum) through its free response.
+  std::string input_note;
+  const auto resonance = std::find(seconds.begin(), seconds.end(), EffectKind::kUnmodelledResonance);
+  if (resonance != seconds.end() && !ResidualFollowsInput(*ctx.validation, ctx.y_val - first.y_val, &input_note))
+    seconds.erase(resonance);
+  else
+    input_note.clear();
   if (seconds.empty()) return out;
   const Candidate base(*ctx.g0, first.spec, ctx.scales, ctx.options->substeps);
   // A lighter polish than a single effect's (the first effect is already in place): the pair
@@ -178,7 +187,9 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
              " (" + tried + ")" + (out.lean_note.empty() ? "" : "; " + out.lean_note) +
              (two_valued ? "; input saturation, dead zone and backlash not tried: the input takes two "
                            "values, on which they act as a gain and an offset"
-                         : "");
+                         : "") +
+             (input_note.empty() ? "" : "; unmodelled_resonance not tried: what " + std::string(EffectName(k1)) +
+                                            " leaves does not follow the input (" + input_note + ")");
   return out;
 }
 

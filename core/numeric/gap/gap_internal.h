@@ -166,6 +166,13 @@ bool BinaryInput(const std::vector<GapRecord>& records);
 // MSE of n samples may come out than the variance it estimates and still be that variance.
 inline double SampleVarianceTolerance(long n) { return 1 + 2 * std::sqrt(2.0 / std::max<long>(1, n)); }
 
+// Whether the input explains a validation residual (concatenated over the records' scored
+// samples, as Stack makes it): the prewhitened test of validation.h, AR(10), lags 0..20 and
+// geometric beyond, per record, at 99.9 %; `note` gets its figures. Records too short for it
+// say so and count as not explained.
+bool ResidualFollowsInput(const std::vector<GapRecord>& validation, const Eigen::VectorXd& residual,
+                          std::string* note);
+
 double Correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 // Validation BIC with the nuisance fitted on the validation records counted: N_val ln V̂ +
 // k ln N_est, V̂ = mse·N_val/(N_val − nuisance_val) the unbiased residual variance.

@@ -390,7 +390,9 @@ TEST_P(GapColouredNoiseTest, AHigherOrderPartThatFollowsTheNoisesWanderIsNotMiss
   // counting 4000 independent samples, about 8 and 17 on the 210 independent ones, and the
   // verdict was unmodelled_dynamics. The Diebold–Mariano z of that gain (Newey–West) is below
   // its 1 % quantile now. For the cubic spring the fixed lag (9) under-covered the noise's
-  // correlation (z 2.52); the automatic lag gives 1.88.
+  // correlation (z 2.52); the automatic lag gives 1.88. Since stop 27 the order check is not run
+  // against the verdict at all when what G0 or the verdict leaves does not follow the input
+  // (coloured noise does not): either reason keeps the effect.
   std::mt19937_64 rng(BenchCaseSeed(71, GetParam().index));
   GapCaseOptions options;
   options.offsets = true;
@@ -400,10 +402,14 @@ TEST_P(GapColouredNoiseTest, AHigherOrderPartThatFollowsTheNoisesWanderIsNotMiss
   const GapVerdict& v = report.verdict;
   std::string gain;
   for (const auto& n : report.notes)
-    if (n.find("validation gain over the verdict so far") != std::string::npos) gain = n;
+    if (n.find("validation gain over the verdict so far") != std::string::npos ||
+        n.find("does not follow the input") != std::string::npos)
+      gain = n;
   std::printf("%s under coloured noise: verdict %s; %s\n", EffectName(c.truth), v.effect.c_str(), gain.c_str());
   EXPECT_EQ(v.effect, EffectName(c.truth));
-  EXPECT_NE(gain.find("not significant"), std::string::npos) << gain;
+  EXPECT_TRUE(gain.find("not significant") != std::string::npos ||
+              gain.find("does not follow the input") != std::string::npos)
+      << gain;
   EXPECT_EQ(report.validation_prediction.size(), report.validation_samples);
 }
 
