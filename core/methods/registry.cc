@@ -229,8 +229,9 @@ MethodReport RunChoosingOperatingPoint(const MethodInfo& info, const IoRecord& r
 }
 
 MethodReport RunOnRecord(const MethodInfo& info, const IoRecord& measured, const nlohmann::json& options) {
+  // (Records too short for a held-out split are taken as they are; the method says what it needs.)
   if (ChoosesItsOperatingPoint(info) && (!options.is_object() || !options.contains("offsets")) &&
-      OffsetsStandOut(measured))
+      measured.NumSamples() >= 40 && OffsetsStandOut(measured))
     return RunChoosingOperatingPoint(info, measured, options.is_object() ? options : nlohmann::json::object());
   nlohmann::json method_options = options;
   const double min_fit = TakeMinFitOption(&method_options);
