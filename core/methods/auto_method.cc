@@ -151,9 +151,8 @@ MethodReport RunAuto(const MethodInput& input, const json& o) {
   }
   // A variant without a treatment is fitted as recorded (not the explicit methods' own choice
   // among the treatments, registry.h): the folds compare the treatments here.
-  const json as_recorded = "none";
   for (Variant& v : variants)
-    if (!v.options.contains("offsets")) v.options["offsets"] = as_recorded;
+    if (!v.options.contains("offsets")) v.options["offsets"] = "none";
   bool by_energy = true;
   if (o.contains("split")) {
     if (o["split"] != "energy" && o["split"] != "samples")

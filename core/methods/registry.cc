@@ -229,22 +229,28 @@ MethodReport RunChoosingOperatingPoint(const MethodInfo& info, const IoRecord& r
 }
 
 MethodReport RunOnRecord(const MethodInfo& info, const IoRecord& measured, const nlohmann::json& options) {
-  // (Records too short for a held-out split are taken as they are; the method says what it needs.)
-  if (ChoosesItsOperatingPoint(info) && (!options.is_object() || !options.contains("offsets")) &&
-      measured.NumSamples() >= 40 && OffsetsStandOut(measured))
-    return RunChoosingOperatingPoint(info, measured, options.is_object() ? options : nlohmann::json::object());
   nlohmann::json method_options = options;
-  const double min_fit = TakeMinFitOption(&method_options);
-  const std::string offsets = TakeOffsetsOption(info, &method_options);
   IoRecord record = measured;
   std::string glitch_note;
   const nlohmann::json glitches =
       TakeGlitchesOption(&method_options) ? BridgeRecordGlitches(&record, &glitch_note) : nlohmann::json::array();
-  MethodInput input;
-  input.record = &record;
-  MethodReport report = offsets != "none" ? RunAboutOperatingPoint(info, record, method_options, offsets)
-                                          : info.run(input, method_options);
-  report = Finish(info, std::move(report), record.sample_time, min_fit);
+  MethodReport report;
+  // (Records too short for a held-out split are taken as they are; the method says what it needs.)
+  if (ChoosesItsOperatingPoint(info) && (!options.is_object() || !options.contains("offsets")) &&
+      record.NumSamples() >= 40 && OffsetsStandOut(record)) {
+    // The treatments are fitted and scored on the record bridged once, here.
+    nlohmann::json bridged_options = options.is_object() ? options : nlohmann::json::object();
+    bridged_options["glitches"] = "keep";
+    report = RunChoosingOperatingPoint(info, record, bridged_options);
+  } else {
+    const double min_fit = TakeMinFitOption(&method_options);
+    const std::string offsets = TakeOffsetsOption(info, &method_options);
+    MethodInput input;
+    input.record = &record;
+    report = offsets != "none" ? RunAboutOperatingPoint(info, record, method_options, offsets)
+                               : info.run(input, method_options);
+    report = Finish(info, std::move(report), record.sample_time, min_fit);
+  }
   if (!glitches.empty()) {
     report.json["glitches"] = glitches;
     report.json["warnings"].push_back(glitch_note);

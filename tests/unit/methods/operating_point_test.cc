@@ -95,6 +95,15 @@ TEST(OperatingPoint, AnExplicitMethodGivenNoOffsetsChoosesThemWhereTheMeansStand
                 fits.at("none").get<double>() + 20.0) << method;
     }
   }
+  // A sensor glitch in the held-out part is bridged once, before the treatments are scored, and
+  // reported once: scored as measured, a +50 spike would sink every held-out fit.
+  IoRecord glitched = record;
+  glitched.y(1900, 0) += 50.0;
+  const MethodReport g = RunMethod("oe", glitched, {{"order", 3}});
+  ASSERT_EQ(g.json.at("glitches").size(), 1u);
+  EXPECT_EQ(g.json.at("glitches")[0].at("sample"), 1900);
+  EXPECT_NE(g.json.at("offsets").at("chosen"), "none");
+  EXPECT_GT(g.json.at("offsets").at("validation_fit_percent").at("mean").get<double>(), 90.0);
   // About zero: nothing is chosen, the record is fitted as it is.
   const IoRecord about_zero = RigRecord(2000, 0.0, 0.0, 0.01, 7);
   ASSERT_FALSE(OffsetsStandOut(about_zero));
