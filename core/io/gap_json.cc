@@ -136,6 +136,11 @@ nlohmann::json GapReportToJson(const GapReport& report) {
       {"output_offset", output_offset},
       {"initial_state", v.nuisance.initial_state},
   };
+  if (!v.nuisance.output_drift.empty()) {
+    nlohmann::json drift = nlohmann::json::array();
+    for (double d : v.nuisance.output_drift) drift.push_back(Number(d));
+    verdict["nuisance"]["output_drift"] = drift;
+  }
   verdict["fit_scheme"] = v.fit_scheme;
   if (v.linear_order > 0) {
     verdict["linear_order"] = v.linear_order;
@@ -248,8 +253,9 @@ std::string GapReportText(const nlohmann::json& report) {
   if (v.contains("nuisance")) {
     const auto& n = v["nuisance"];
     s << "  nuisance: input offset " << n.at("input_offset") << ", output offset "
-      << (n.at("output_offset").empty() ? nlohmann::json() : n.at("output_offset")[0])
-      << ", initial state " << n.at("initial_state").get<std::string>() << "; fit "
+      << (n.at("output_offset").empty() ? nlohmann::json() : n.at("output_offset")[0]);
+    if (n.contains("output_drift") && !n["output_drift"].empty()) s << ", output drift " << n["output_drift"][0] << "/s";
+    s << ", initial state " << n.at("initial_state").get<std::string>() << "; fit "
       << v.value("fit_scheme", "") << "\n";
   }
   s << "where: " << report.at("where").at("summary").get<std::string>() << "\n";

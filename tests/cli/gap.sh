@@ -57,6 +57,25 @@ expect "glitches" "$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir
 "$idrig" gap bench --cases 1 --seed 4 --samples 600 --add-glitches 2 --glitches keep --json > "$dir/gl.json" 2>/dev/null \
   || fail "gap bench --add-glitches exited with $?"
 jq -e '.add_glitches == 2 and .glitches == "keep"' "$dir/gl.json" > /dev/null || fail "bench JSON lacks add_glitches/glitches"
+
+# A sensor that drifts (a ramp of 15 noise sigmas, up over the estimation record, down over the
+# validation one): a nuisance parameter reported per estimation record, not an effect.
+sigma=$(jq .noise_sigma "$dir/case2-truth.json")
+for part in est val; do
+  awk -F, -v sg="$sigma" -v sign="$([ $part = est ] && echo 1 || echo -1)" \
+    'NR == 1 { print; next } { printf "%s,%s,%.10g\n", $1, $2, $3 + sign * 15 * sg * (NR - 2) / 1999 }' \
+    "$dir/case2-$part.csv" > "$dir/drift-$part.csv"
+done
+out=$("$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/drift-est.csv" --validate "$dir/drift-val.csv" \
+      --json) || fail "gap diagnose on a drifting record exited with $?"
+jq -e --argjson s "$sigma" '.verdict.effect == "time_delay" and (.verdict.nuisance.output_drift | length) == 1
+       and (.verdict.nuisance.output_drift[0] - 15 * $s / 19.99 | fabs) < 3 * $s / 19.99' <<<"$out" > /dev/null \
+  || fail "drift not taken as a nuisance: $(jq -c '[.verdict.effect, .verdict.nuisance]' <<<"$out")"
+out=$("$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/drift-est.csv" --validate "$dir/drift-val.csv" \
+      --drift none --json) || fail "gap diagnose --drift none exited with $?"
+jq -e '.verdict.nuisance | has("output_drift") | not' <<<"$out" > /dev/null || fail "--drift none still fitted a drift"
+expect "drift" "$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/drift-est.csv" --drift maybe
+echo "ok: a sensor drift is a nuisance parameter (--drift fit|none)"
 awk 'NR <= 500 || NR > 700' "$dir/case2-est.csv" > "$dir/spliced.csv"
 expect "not uniform at sample 499: t jumps" "$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/spliced.csv"
 echo "ok: a glitch bridged, a splice refused"

@@ -1,7 +1,8 @@
-// idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--glitches bridge|keep] [--json]
+// idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--glitches bridge|keep]
+//                    [--drift fit|none] [--json]
 // idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--ts S] [--jobs J] [--offsets] [--combos F]
 //                 [--excitation K] [--integrating] [--plants zeros|two-mass] [--damping LO,HI] [--noise-pole A]
-//                 [--add-glitches N] [--glitches bridge|keep] [--dump DIR] [--json]
+//                 [--add-glitches N] [--glitches bridge|keep] [--add-drift S] [--drift fit|none] [--dump DIR] [--json]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -72,7 +73,8 @@ struct BenchSettings {
   std::vector<double> damping = {0.15, 0.8};
   bool json = false, offsets = false, integrating = false;
   int add_glitches = 0;
-  std::string dump, excitation, plants, glitches = "bridge";
+  double add_drift = 0;
+  std::string dump, excitation, plants, glitches = "bridge", drift = "fit";
   std::vector<std::string> only;  // keep the cases that withhold one of these effects
 };
 
@@ -95,6 +97,7 @@ GapCaseOptions CaseOptions(const BenchSettings& b) {
   options.noise_pole = b.noise_pole;
   options.plants = b.plants;
   options.glitches = b.add_glitches;
+  options.drift = b.add_drift;
   return options;
 }
 
@@ -135,6 +138,7 @@ void RunBench(const BenchSettings& b) {
       GapOptions diagnosis;
       diagnosis.threads = 1;  // the cases run in parallel instead
       diagnosis.bridge_glitches = b.glitches == "bridge";
+      diagnosis.fit_drift = b.drift == "fit";
       const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, diagnosis);
       GapBenchOutcome& o = outcomes[slot];
       o.truth = truth;
@@ -165,6 +169,7 @@ void RunBench(const BenchSettings& b) {
                           {"integrating", b.integrating}, {"excitation", b.excitation},
                           {"damping", b.damping}, {"noise_pole", b.noise_pole}, {"plants", b.plants}, {"only", b.only},
                           {"add_glitches", b.add_glitches}, {"glitches", b.glitches},
+                          {"add_drift", b.add_drift}, {"drift", b.drift},
                           {"single_cases", s.single_cases},
                           {"top1_accuracy", s.top1_accuracy}, {"false_alarm_rate", s.false_alarm_rate},
                           {"single_extra_effect", s.single_extra},
@@ -188,6 +193,8 @@ void RunBench(const BenchSettings& b) {
             << " dB, " << b.samples << " samples per record at Ts " << b.sample_time << " s"
             << (b.offsets ? ", actuator and sensor offsets" : "")
             << (b.add_glitches ? ", " + std::to_string(b.add_glitches) + " glitches per record (" + b.glitches + ")" : "")
+            << (b.add_drift > 0 ? ", a sensor drift of " + std::to_string(b.add_drift) + " noise sigmas per record" : "")
+            << (b.drift == "none" ? ", drift not fitted" : "")
             << ", two-effect share " << b.combos
             << "\n"
             << "top-1 accuracy on single effects " << Rate(s.single_correct, s.single_cases) << "\n"
@@ -227,7 +234,7 @@ void RegisterGapCommand(CLI::App& app) {
   struct DiagnoseArgs {
     std::string sim;
     std::vector<std::string> data, validate;
-    std::string plots, u_name, y_name, time_name, glitches = "bridge";
+    std::string plots, u_name, y_name, time_name, glitches = "bridge", drift = "fit";
     bool json = false;
   };
   auto d = std::make_shared<DiagnoseArgs>();
@@ -244,6 +251,11 @@ void RegisterGapCommand(CLI::App& app) {
                        "bridge (default: output samples far out of the signal, a sensor or acquisition glitch, are "
                        "bridged from their neighbours before fitting and listed under \"glitches\") or keep")
       ->check(CLI::IsMember({"bridge", "keep"}));
+  diagnose->add_option("--drift", d->drift,
+                       "fit (default: a slow sensor drift, a ramp per record, is a nuisance parameter beside the "
+                       "output offset where G0 neither integrates nor is fitted by multiple shooting; reported under "
+                       "verdict.nuisance.output_drift) or none")
+      ->check(CLI::IsMember({"fit", "none"}));
   diagnose->add_flag("--json", d->json, "print the report as JSON (idrig.gap/1)");
   diagnose->add_option("--plots", d->plots, "also write SVG plots of the gap (frequency, amplitude, state, time, ranking) into this directory");
   diagnose->callback([d] {
@@ -259,6 +271,7 @@ void RegisterGapCommand(CLI::App& app) {
     for (const auto& p : d->validate) validation.push_back(ToGapRecord(read(p)));
     GapOptions options;
     options.bridge_glitches = d->glitches == "bridge";
+    options.fit_drift = d->drift == "fit";
     const GapReport report = DiagnoseGap(sim, estimation, validation, options);
     nlohmann::json out = GapReportToJson(report);
     out["sim"] = d->sim;
@@ -357,6 +370,11 @@ void RegisterGapCommand(CLI::App& app) {
   bench->add_option("--glitches", b->glitches,
                     "bridge (default: output glitches bridged before fitting, as gap diagnose does) or keep")
       ->check(CLI::IsMember({"bridge", "keep"}));
+  bench->add_option("--add-drift", b->add_drift,
+                    "a slow sensor drift: a ramp to +S noise sigmas over the estimation record and to -S over the validation record, before the ADC")
+      ->check(CLI::Range(0.0, 1e6));
+  bench->add_option("--drift", b->drift, "fit (default, as gap diagnose does) or none: the sensor drift nuisance")
+      ->check(CLI::IsMember({"fit", "none"}));
   bench->callback([b] { RunBench(*b); });
 }
 

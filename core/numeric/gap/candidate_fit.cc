@@ -63,21 +63,40 @@ Eigen::VectorXd EquilibratedSolve(const Eigen::MatrixXd& gram, const Eigen::Vect
 }
 
 // Least squares of r on [1, F] (F = the free response's first rows, zero below them): [b; x0].
+// With `ramp` (a sensor drift's column, as long as r): on [1, F, ramp], [b; x0; d].
 Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixXd& free_rows,
-                                  long* rank = nullptr) {
-  const long len = r.size(), rows = std::min<long>(len, free_rows.rows()), k = 1 + free_rows.cols();
+                                  long* rank = nullptr, const Eigen::VectorXd* ramp = nullptr) {
+  const long len = r.size(), rows = std::min<long>(len, free_rows.rows()), n = free_rows.cols();
+  const long k = 1 + n + (ramp ? 1 : 0);
   Eigen::MatrixXd gram(k, k);
   Eigen::VectorXd rhs(k);
   gram(0, 0) = double(len);
   rhs(0) = r.sum();
-  if (k > 1) {
+  if (n > 0) {
     const auto f = free_rows.topRows(rows);
-    gram.block(1, 1, k - 1, k - 1) = f.transpose() * f;
-    gram.block(0, 1, 1, k - 1) = f.colwise().sum();
-    gram.block(1, 0, k - 1, 1) = gram.block(0, 1, 1, k - 1).transpose();
-    rhs.tail(k - 1) = f.transpose() * r.head(rows);
+    gram.block(1, 1, n, n) = f.transpose() * f;
+    gram.block(0, 1, 1, n) = f.colwise().sum();
+    gram.block(1, 0, n, 1) = gram.block(0, 1, 1, n).transpose();
+    rhs.segment(1, n) = f.transpose() * r.head(rows);
+  }
+  if (ramp) {
+    gram(k - 1, k - 1) = ramp->squaredNorm();
+    gram(0, k - 1) = gram(k - 1, 0) = ramp->sum();
+    if (n > 0) {
+      gram.block(1, k - 1, n, 1) = free_rows.topRows(rows).transpose() * ramp->head(rows);
+      gram.block(k - 1, 1, 1, n) = gram.block(1, k - 1, n, 1).transpose();
+    }
+    rhs(k - 1) = ramp->dot(r);
   }
   return EquilibratedSolve(gram, rhs, rank);
+}
+
+// A sensor drift's column for a segment of `len` samples: (k − (len − 1)/2)·Ts, centred so that
+// the offset b stays the segment's mean level.
+Eigen::VectorXd Ramp(long len, double ts) {
+  Eigen::VectorXd ramp(len);
+  for (long k = 0; k < len; ++k) ramp(k) = (k - 0.5 * (len - 1)) * ts;
+  return ramp;
 }
 
 // The shooting segments of a record's scored samples, as (start, length): one, or every
@@ -340,25 +359,36 @@ namespace {
 // the integrator's level are one direction: a segment's fit could place the clip anywhere, the
 // limits' start (the measured quantiles less one global offset) clipped nothing, and the fit of
 // the limits had no slope to follow.
+//
+// `ramp` (one entry per sample, or empty): a sensor drift d·ramp added after the maps, where the
+// sensor is (coef = [b, x0, d]); in the clip's coordinates a drifting reading would move the limits.
 Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen::VectorXd& z,
                                           const Eigen::MatrixXd& free, const std::vector<Effect>& maps,
-                                          Eigen::VectorXd* fitted, bool offset_inside) {
+                                          Eigen::VectorXd* fitted, bool offset_inside,
+                                          const Eigen::VectorXd& ramp) {
   const long len = y.size(), rows = std::min<long>(len, free.rows()), n = free.cols();
+  const bool drift = ramp.size() == len;  // a sensor drift d·ramp after the maps: coef = [b, x0, d]
   auto evaluate = [&](const Eigen::VectorXd& coef, Eigen::VectorXd& m, Eigen::VectorXd* slope) {
     m = z;
-    if (n > 0) m.head(rows) += free.topRows(rows) * coef.tail(n);
+    if (n > 0) m.head(rows) += free.topRows(rows) * coef.segment(1, n);
     if (offset_inside) m.array() += coef(0);
     ApplyOutputMaps(maps, m, slope);
     if (!offset_inside) m.array() += coef(0);
+    if (drift) m += coef(1 + n) * ramp;
     return (y - m).squaredNorm();
   };
-  // One Gauss–Newton step: b after the maps has slope 1; inside them, the maps' slope.
+  // One Gauss–Newton step: b after the maps has slope 1; inside them, the maps' slope; the drift
+  // (after the maps) slope 1.
   auto step = [&](const Eigen::VectorXd& r, const Eigen::VectorXd& slope) {
-    const Eigen::MatrixXd weighted = slope.head(rows).asDiagonal() * free.topRows(rows);
-    if (!offset_inside) return OffsetAndStateFit(r, weighted);
-    Eigen::MatrixXd design = Eigen::MatrixXd::Zero(len, 1 + n);
-    design.col(0) = slope;
-    design.block(0, 1, rows, n) = weighted;
+    if (!offset_inside)
+      return OffsetAndStateFit(r, slope.head(rows).asDiagonal() * free.topRows(rows), nullptr, drift ? &ramp : nullptr);
+    Eigen::MatrixXd design = Eigen::MatrixXd::Zero(len, 1 + n + (drift ? 1 : 0));
+    if (offset_inside)
+      design.col(0) = slope;
+    else
+      design.col(0).setOnes();
+    design.block(0, 1, rows, n) = slope.head(rows).asDiagonal() * free.topRows(rows);
+    if (drift) design.col(1 + n) = ramp;
     return EquilibratedSolve(design.transpose() * design, design.transpose() * r);
   };
   // A fixed number of full steps, each kept only when it lowers the sum of squares: the result
@@ -377,14 +407,15 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
     }
     return coef;
   };
+  const long k = 1 + n + (drift ? 1 : 0);
   Eigen::VectorXd mapped = z;
   if (!offset_inside) ApplyOutputMaps(maps, mapped, nullptr);
-  Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(1 + n);
+  Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(k);
   at_rest(0) = (y - mapped).mean();
   double sse_rest = INFINITY, sse_identity = INFINITY;
   Eigen::VectorXd coef = refine(at_rest, sse_rest);
-  if (n > 0) {
-    const Eigen::VectorXd other = refine(OffsetAndStateFit(y - z, free), sse_identity);
+  if (n > 0 || drift) {
+    const Eigen::VectorXd other = refine(OffsetAndStateFit(y - z, free, nullptr, drift ? &ramp : nullptr), sse_identity);
     if (sse_identity < sse_rest) coef = other;
   }
   // A |y| sensor on a plant whose free response holds a level (an integrator: F v ≈ 1): the
@@ -402,8 +433,8 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
       Eigen::VectorXd grid_coef;
       for (int i = 0; i <= 40; ++i) {
         const double c = lo + (hi - lo) * i / 40.0;
-        Eigen::VectorXd trial = Eigen::VectorXd::Zero(1 + n);
-        trial.tail(n) = c * v;
+        Eigen::VectorXd trial = Eigen::VectorXd::Zero(k);
+        trial.segment(1, n) = c * v;
         Eigen::VectorXd m = z.array() + c;
         ApplyOutputMaps(maps, m, nullptr);
         trial(0) = (y - m).mean();
@@ -431,6 +462,7 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
 Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& record,
                                    Nuisance* nuisance) const {
   std::vector<Effect> maps;
+  if (nuisance) nuisance->output_level = Eigen::VectorXd::Zero(record.y.size());
   Eigen::VectorXd y = Simulate(x, record, spec_.free_state ? &maps : nullptr);
   if (!y.allFinite()) return y;
   const auto segments = Segments(record, spec_.segment);
@@ -448,24 +480,33 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
       std::none_of(maps.begin(), maps.end(), [](const Effect& e) { return e.kind != EffectKind::kOutputSaturation; });
   for (size_t j = 0; j < segments.size(); ++j) {
     const auto [start, len] = segments[j];
+    // A sensor drift is a ramp beside the offset (after the output maps, where the sensor is).
+    const Eigen::VectorXd ramp = spec_.drift ? Ramp(len, record.sample_time) : Eigen::VectorXd();
+    const long n = free.cols();
     Eigen::VectorXd coef;
-    if (!maps.empty()) {  // the state inside the maps, the offset after them
+    if (!maps.empty()) {  // the state inside the maps, the offset (and drift) after them
       Eigen::VectorXd fitted;
       coef = OffsetAndStateThroughMaps(record.y.segment(start, len), y.segment(start, len), free, maps, &fitted,
-                                       offset_inside);
+                                       offset_inside, ramp);
       y.segment(start, len) = fitted;
     } else {
-      coef = OffsetAndStateFit(record.y.segment(start, len) - y.segment(start, len), free);
+      coef = OffsetAndStateFit(record.y.segment(start, len) - y.segment(start, len), free, nullptr,
+                               spec_.drift ? &ramp : nullptr);
       if (coef.allFinite()) {
         y.segment(start, len).array() += coef(0);
         const long rows = std::min<long>(len, free.rows());
-        if (free.cols() > 0) y.segment(start, rows) += free.topRows(rows) * coef.tail(free.cols());
+        if (n > 0) y.segment(start, rows) += free.topRows(rows) * coef.segment(1, n);
+        if (spec_.drift) y.segment(start, len) += coef(1 + n) * ramp;
       }
     }
     if (nuisance && j == 0) {
       nuisance->output_offset = coef(0);
-      nuisance->initial_state_rms =
-          free.cols() > 0 ? coef.tail(free.cols()).norm() / std::sqrt(double(free.cols())) : 0.0;
+      nuisance->output_drift = spec_.drift ? coef(1 + n) : 0.0;
+      nuisance->initial_state_rms = n > 0 ? coef.segment(1, n).norm() / std::sqrt(double(n)) : 0.0;
+      nuisance->output_level.resize(record.y.size());
+      for (long k = 0; k < record.y.size(); ++k)
+        nuisance->output_level(k) =
+            coef(0) + nuisance->output_drift * (k - start - 0.5 * (len - 1)) * record.sample_time;
     }
   }
   // Quantisation last, as a smoothed staircase on the lattice the samples sit on (φ + k·q, φ
@@ -499,7 +540,8 @@ long Candidate::NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapR
                                                   : Eigen::MatrixXd(longest, 0);
     for (const auto& segment : segments) {
       long rank = 0;
-      OffsetAndStateFit(Eigen::VectorXd::Zero(segment.second), free, &rank);
+      const Eigen::VectorXd ramp = spec_.drift ? Ramp(segment.second, record.sample_time) : Eigen::VectorXd();
+      OffsetAndStateFit(Eigen::VectorXd::Zero(segment.second), free, &rank, spec_.drift ? &ramp : nullptr);
       columns += rank;
     }
   }
@@ -632,6 +674,7 @@ void FitSpec(const FitContext& ctx, const CandidateSpec& spec,
   for (const GapRecord& r : *ctx.estimation) {
     cand.Predict(best.x, r, &nuisance);
     c.output_offsets.push_back(nuisance.output_offset);
+    if (spec.drift) c.output_drifts.push_back(nuisance.output_drift);
   }
   w.x = best.x;
   w.spec = spec;

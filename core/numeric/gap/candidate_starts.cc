@@ -138,7 +138,7 @@ std::vector<std::vector<double>> LinearStarts(const FitContext& ctx, EffectKind 
     Eigen::VectorXd a, b;
     if (kind == EffectKind::kCubicStiffness) {
       // force −k3 y³ ⇒ y − G u ≈ −k3·G_mech(y³) (measured y, its offset removed).
-      const Eigen::VectorXd yc = r.y.array() - nu.output_offset;
+      const Eigen::VectorXd yc = r.y - nu.output_level;
       a = SimulateWithEffect(plant, Effect{}, yc.array().cube().matrix(), r.sample_time, sim).tail(n);
       a = -a;
     } else if (kind == EffectKind::kCoulombFriction) {
@@ -151,7 +151,7 @@ std::vector<std::vector<double>> LinearStarts(const FitContext& ctx, EffectKind 
       a = -SimulateWithEffect(plant, Effect{}, s, r.sample_time, sim).tail(n);
     } else {
       // y_m = y + a2 y² + a3 y³ about the base prediction (its offset removed).
-      const Eigen::VectorXd yc = (y_hat.array() - nu.output_offset).tail(n);
+      const Eigen::VectorXd yc = (y_hat - nu.output_level).tail(n);
       a = yc.array().square();
       b = yc.array().cube();
     }

@@ -316,8 +316,9 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const Effect& effect,
 Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Effect>& effects_in,
                             const Eigen::VectorXd& u, double sample_time, double noise_sigma,
                             std::mt19937_64& rng, double input_offset, double output_offset,
-                            double noise_pole) {
-  if (effects_in.size() <= 1 && input_offset == 0 && output_offset == 0 && noise_pole == 0)
+                            double noise_pole, const Eigen::VectorXd& sensor_drift) {
+  if (effects_in.size() <= 1 && input_offset == 0 && output_offset == 0 && noise_pole == 0 &&
+      sensor_drift.size() == 0)
     return SimulateRig(plant, effects_in.empty() ? Effect{} : effects_in.front(), u, sample_time,
                        noise_sigma, rng);
   std::vector<Effect> effects = effects_in;
@@ -362,6 +363,7 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Eff
   for (long k = 0; k < y.size(); ++k) {
     e = k == 0 ? Gaussian(rng) : noise_pole * e + innovation * Gaussian(rng);
     y(k) += noise_sigma * e;
+    if (k < sensor_drift.size()) y(k) += sensor_drift(k);
     if (quantizer) y(k) = quantizer->params[0] * std::round(y(k) / quantizer->params[0]);
     y(k) += output_offset;
   }
@@ -466,11 +468,17 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
       if (e.kind == EffectKind::kActuatorLag) slow += e.params[0];
     warm = std::clamp<long>(static_cast<long>(10 * slow / options.sample_time), 100, 3000);
   }
-  auto record = [&](const Eigen::VectorXd& u, double sigma, std::mt19937_64& g) {
+  // drift: the sensor's rise over the record, in noise sigmas (GapCaseOptions::drift).
+  auto record = [&](const Eigen::VectorXd& u, double sigma, std::mt19937_64& g, double drift = 0) {
     Eigen::VectorXd padded = Eigen::VectorXd::Zero(warm + u.size());
     padded.tail(u.size()) = u;
+    Eigen::VectorXd ramp;
+    if (drift != 0) {
+      ramp = Eigen::VectorXd::Zero(padded.size());
+      for (long k = 0; k < u.size(); ++k) ramp(warm + k) = drift * sigma * k / std::max<long>(1, u.size() - 1);
+    }
     const Eigen::VectorXd y = SimulateRig(c.real, c.effects, padded, options.sample_time, sigma, g,
-                                          c.input_offset, c.output_offset, options.noise_pole);
+                                          c.input_offset, c.output_offset, options.noise_pole, ramp);
     return Eigen::VectorXd(y.tail(u.size()));
   };
   // Noise from the SNR of the rig's own output on the estimation input.
@@ -479,10 +487,10 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
   const double rms = std::sqrt((y_clean.array() - y_clean.mean()).square().mean());
   c.noise_sigma = rms * std::pow(10.0, -options.snr_db / 20);
   c.estimation.u = u_est;
-  c.estimation.y = record(u_est, c.noise_sigma, rng);
+  c.estimation.y = record(u_est, c.noise_sigma, rng, options.drift);
   c.estimation.sample_time = options.sample_time;
   c.validation.u = u_val;
-  c.validation.y = record(u_val, c.noise_sigma, rng);
+  c.validation.y = record(u_val, c.noise_sigma, rng, -options.drift);
   c.validation.sample_time = options.sample_time;
   // Sensor or acquisition glitches, drawn last so that the rest of the case does not move.
   for (GapRecord* r : {&c.estimation, &c.validation}) AddGlitches(r->y, options.glitches, rng);

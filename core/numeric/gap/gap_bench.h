@@ -51,6 +51,9 @@ struct GapCaseOptions {
   // Sensor or acquisition glitches per record (a run of 1–3 samples each: a spike 2–20 output
   // spans off, a dropout to zero, or a reading stuck one span beyond the range), added last.
   int glitches = 0;
+  // A slow sensor drift: a ramp from 0 to `drift` noise sigmas over the estimation record and to
+  // −`drift` over the validation record, in the analogue reading (before the ADC, after the noise).
+  double drift = 0;
 };
 
 // Adds `count` glitches (as GapCaseOptions::glitches) to y.
@@ -93,14 +96,16 @@ const std::vector<std::pair<EffectKind, EffectKind>>& CoOccurringEffectPairs();
 // the linear effects folded into the plant, one feedback effect (friction or cubic stiffness),
 // output maps (saturation, sensor), noise, ADC (quantisation), sensor offset. With noise_pole
 // a ≠ 0 the noise is coloured, first-order autoregressive e(k) = a e(k−1) + √(1 − a²) σ w(k)
-// (the same variance σ², the same random numbers as white noise).
+// (the same variance σ², the same random numbers as white noise). `sensor_drift` (per sample;
+// empty: none) is added to the analogue reading with the noise, before the ADC.
 Eigen::VectorXd SimulateRig(const TransferFunction& plant, const Effect& effect,
                             const Eigen::VectorXd& u, double sample_time, double noise_sigma,
                             std::mt19937_64& rng);
 Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Effect>& effects,
                             const Eigen::VectorXd& u, double sample_time, double noise_sigma,
                             std::mt19937_64& rng, double input_offset = 0,
-                            double output_offset = 0, double noise_pole = 0);
+                            double output_offset = 0, double noise_pole = 0,
+                            const Eigen::VectorXd& sensor_drift = Eigen::VectorXd());
 
 // The bench's plan: case `index` has a pair (CoOccurringEffectPairs in turn) for a share
 // `combo_share` of the cases, spread evenly, and otherwise a single effect (the vocabulary in

@@ -62,6 +62,9 @@ struct GapOptions {
   // are fitted as measured.
   bool bridge_glitches = true;
   bool fixed_integrating = false;
+  // A slow sensor drift (a ramp per record beside its offset) among the nuisance parameters, where
+  // G0 is fitted by single shooting and does not integrate (ChooseFitScheme).
+  bool fit_drift = true;
 };
 
 struct BandGap {
@@ -131,6 +134,7 @@ struct CandidateFit {
   double input_offset = 0, input_offset_std = 0;  // fitted actuator offset du (u units)
   bool input_offset_fitted = false;
   std::vector<double> output_offsets;             // per estimation record (first segment)
+  std::vector<double> output_drifts;              // the same, [y units/s], when a drift is fitted
   int evaluations = 0;
   std::string note;
 };
@@ -143,6 +147,10 @@ struct GapNuisance {
   double input_offset = 0, input_offset_std = 0;
   bool input_offset_fitted = false;
   std::vector<double> output_offset;  // per estimation record
+  // A sensor drift per estimation record [y units/s] about its middle (empty: not fitted — an
+  // integrating or lightly damped G0, where an actuator offset or the segments' own offsets take
+  // a ramp, or GapOptions::fit_drift off).
+  std::vector<double> output_drift;
   std::string initial_state;          // how the initial state was treated
 };
 

@@ -47,11 +47,18 @@ struct CandidateSpec {
   bool input_offset = false;  // an actuator offset du (fitted by LM): u → u + du
   bool free_state = true;     // output offset and free initial state by variable projection
   long segment = 0;           // samples per shooting segment (own state each); 0: whole record
+  // A sensor drift per record (segment), a ramp beside the output offset, by variable projection:
+  // set where it is not an input offset in disguise (ChooseFitScheme).
+  bool drift = false;
 };
 
 struct Nuisance {
   double input_offset = 0, output_offset = 0;  // du, and b of the first segment
+  double output_drift = 0;                     // d of the first segment [y units/s] (spec.drift)
   double initial_state_rms = 0;                // RMS of the first segment's x0 (realisation units)
+  // The sensor's level b + d·(t − t_mid) at every sample of the record (the first segment's b, d),
+  // for putting measured outputs into the plant's coordinates.
+  Eigen::VectorXd output_level;
 };
 
 // One candidate: x = [θ (plant log multipliers) | du | φ_1 | φ_2].

@@ -151,6 +151,7 @@ CandidateWork ReferenceWork(const Candidate& cand, const FitOutcome& fit, const 
     Nuisance nu;
     cand.Predict(fit.x, r, &nu);
     c.output_offsets.push_back(nu.output_offset);
+    if (cand.spec().drift) c.output_drifts.push_back(nu.output_drift);
   }
   w.y_val = y_val;
   w.x = fit.x;
@@ -209,6 +210,7 @@ void gap_detail::AdoptCandidate(const CandidateFit& c, GapVerdict& v) {
   v.nuisance.input_offset_std = c.input_offset_std;
   v.nuisance.input_offset_fitted = c.input_offset_fitted;
   v.nuisance.output_offset = c.output_offsets;
+  v.nuisance.output_drift = c.output_drifts;
 }
 
 void gap_detail::ParallelFor(size_t count, int threads_wanted, const std::function<void(size_t)>& body,
@@ -392,6 +394,9 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     ctx.nuisance.segment = options.fixed_segment;
     ctx.integrating = options.fixed_integrating;
   }
+  // A sensor drift where it is not an actuator offset in disguise (on an integrator du is a
+  // ramp) and not already taken by the shooting segments' own offsets.
+  ctx.nuisance.drift = options.fit_drift && ctx.nuisance.segment == 0 && !ctx.integrating;
   GapVerdict& v = report.verdict;
   v.fit_scheme = ctx.nuisance.segment > 0 ? "multiple_shooting" : "single_shooting";
   v.shooting_segment = ctx.nuisance.segment;
@@ -432,7 +437,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     for (const auto& r : estimation) {
       Nuisance nuisance;
       refit.Predict(refit_fit.x, r, &nuisance);
-      for (long k = 0; k < r.y.size(); ++k) centred.push_back(r.y(k) - nuisance.output_offset);
+      for (long k = 0; k < r.y.size(); ++k) centred.push_back(r.y(k) - nuisance.output_level(k));
     }
     double y_max = 0;
     for (double v : centred) y_max = std::max(y_max, std::abs(v));

@@ -44,6 +44,33 @@ TEST(GapBenchTest, OffsetsShiftALinearRigByTheSteadyStateOfTheActuatorOffsetAndT
   }
 }
 
+TEST(GapBenchTest, ASensorDriftIsARampOfTheRequestedSizeAndKeepsTheQuantisersLattice) {
+  for (const EffectKind truth : {EffectKind::kNone, EffectKind::kOutputQuantization}) {
+    GapCaseOptions options;
+    options.samples = 1000;
+    options.excitation = "levels";
+    std::mt19937_64 rng_a(21), rng_b(21);
+    const GapCase plain = MakeGapCase(truth, rng_a, options);
+    options.drift = 10;
+    const GapCase drifting = MakeGapCase(truth, rng_b, options);
+    ASSERT_EQ(plain.noise_sigma, drifting.noise_sigma);
+    const double sigma = plain.noise_sigma;
+    const long n = plain.estimation.y.size();
+    for (long k = 0; k < n; k += 111) {
+      const double ramp = 10 * sigma * k / double(n - 1);
+      const double tolerance = truth == EffectKind::kNone ? 1e-9 : plain.effect.params[0];  // one lattice step
+      EXPECT_NEAR(drifting.estimation.y(k) - plain.estimation.y(k), ramp, tolerance + 1e-9) << k;
+      EXPECT_NEAR(drifting.validation.y(k) - plain.validation.y(k), -ramp, tolerance + 1e-9) << k;
+    }
+    if (truth == EffectKind::kOutputQuantization) {
+      // Before the ADC: every reading is still on the lattice q·k.
+      const double q = plain.effect.params[0];
+      for (long k = 0; k < n; ++k)
+        ASSERT_NEAR(drifting.estimation.y(k) / q, std::round(drifting.estimation.y(k) / q), 1e-6) << k;
+    }
+  }
+}
+
 TEST(GapBenchTest, ColouredNoiseHasTheRequestedPoleAndTheSameVariance) {
   // AR(1) noise e(k) = a e(k−1) + √(1 − a²) σ w(k): variance σ², lag-1 autocorrelation a
   // (closed form), on a linear rig without effects, so y − G u − offsets is the noise.
