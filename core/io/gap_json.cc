@@ -209,12 +209,16 @@ nlohmann::json GapReportToJson(const GapReport& report) {
   for (const auto& g : report.glitches)
     glitches.push_back({{"records", g.records}, {"record", g.record}, {"sample", g.sample},
                         {"value", g.value}, {"replaced_by", g.replaced_by}});
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& g : report.sensor_steps)
+    steps.push_back({{"records", g.records}, {"record", g.record}, {"sample", g.sample}, {"size", g.size}});
   return {{"format", "idrig.gap/1"},
           {"verdict", verdict},
           {"ranking", ranking},
           {"where", where},
           {"notes", report.notes},
           {"glitches", glitches},
+          {"sensor_steps", steps},
           {"estimation_samples", report.estimation_samples},
           {"validation_samples", report.validation_samples}};
 }

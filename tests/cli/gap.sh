@@ -76,6 +76,21 @@ out=$("$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/drift-est.c
 jq -e '.verdict.nuisance | has("output_drift") | not' <<<"$out" > /dev/null || fail "--drift none still fitted a drift"
 expect "drift" "$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/drift-est.csv" --drift maybe
 echo "ok: a sensor drift is a nuisance parameter (--drift fit|none)"
+
+# A sensor re-zeroed part way through the estimation record (8 noise sigmas): the step is found
+# and reported (a sensor level of its own from there on); --sensor-steps ignore fits as measured.
+sigma0=$(jq .noise_sigma "$dir/case0-truth.json")
+awk -F, -v sg="$sigma0" 'NR == 1 { print; next } { printf "%s,%s,%.10g\n", $1, $2, $3 + (NR - 2 >= 1200 ? 8 * sg : 0) }' \
+  "$dir/case0-est.csv" > "$dir/step-est.csv"
+out=$("$idrig" gap diagnose --sim "$dir/case0-sim.json" --data "$dir/step-est.csv" --validate "$dir/case0-val.csv" \
+      --json) || fail "gap diagnose on a stepping sensor exited with $?"
+jq -e '(.sensor_steps | length) == 1 and .sensor_steps[0].records == "estimation" and .sensor_steps[0].sample == 1200' \
+  <<<"$out" > /dev/null || fail "sensor step not found: $(jq -c '[.verdict.effect, .sensor_steps]' <<<"$out")"
+out=$("$idrig" gap diagnose --sim "$dir/case0-sim.json" --data "$dir/step-est.csv" --validate "$dir/case0-val.csv" \
+      --sensor-steps ignore --json) || fail "gap diagnose --sensor-steps ignore exited with $?"
+jq -e '(.sensor_steps | length) == 0' <<<"$out" > /dev/null || fail "--sensor-steps ignore still marked a step"
+expect "sensor-steps" "$idrig" gap diagnose --sim "$dir/case0-sim.json" --data "$dir/step-est.csv" --sensor-steps cut
+echo "ok: a sensor step gets a level of its own (--sensor-steps find|ignore)"
 awk 'NR <= 500 || NR > 700' "$dir/case2-est.csv" > "$dir/spliced.csv"
 expect "not uniform at sample 499: t jumps" "$idrig" gap diagnose --sim "$dir/case2-sim.json" --data "$dir/spliced.csv"
 echo "ok: a glitch bridged, a splice refused"

@@ -1,8 +1,9 @@
 // idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--glitches bridge|keep]
-//                    [--drift fit|none] [--json]
+//                    [--drift fit|none] [--sensor-steps find|ignore] [--json]
 // idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--ts S] [--jobs J] [--offsets] [--combos F]
 //                 [--excitation K] [--integrating] [--plants zeros|two-mass] [--damping LO,HI] [--noise-pole A]
-//                 [--add-glitches N] [--glitches bridge|keep] [--add-drift S] [--drift fit|none] [--dump DIR] [--json]
+//                 [--add-glitches N] [--glitches bridge|keep] [--add-drift S] [--drift fit|none]
+//                 [--sensor-steps find|ignore] [--dump DIR] [--json]
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -74,7 +75,7 @@ struct BenchSettings {
   bool json = false, offsets = false, integrating = false;
   int add_glitches = 0;
   double add_drift = 0;
-  std::string dump, excitation, plants, glitches = "bridge", drift = "fit";
+  std::string dump, excitation, plants, glitches = "bridge", drift = "fit", sensor_steps = "find";
   std::vector<std::string> only;  // keep the cases that withhold one of these effects
 };
 
@@ -139,6 +140,7 @@ void RunBench(const BenchSettings& b) {
       diagnosis.threads = 1;  // the cases run in parallel instead
       diagnosis.bridge_glitches = b.glitches == "bridge";
       diagnosis.fit_drift = b.drift == "fit";
+      diagnosis.find_sensor_steps = b.sensor_steps == "find";
       const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation}, diagnosis);
       GapBenchOutcome& o = outcomes[slot];
       o.truth = truth;
@@ -155,7 +157,9 @@ void RunBench(const BenchSettings& b) {
       std::cerr << "case " << i << ": truth " << truth_label << " (" << c.excitation
                 << "), verdict " << o.verdict << " [" << named_label << "], confidence "
                 << std::setprecision(3) << o.confidence << ", shrink " << o.shrink << ", "
-                << o.seconds << " s\n";
+                << o.seconds << " s"
+                << (report.sensor_steps.empty() ? "" : ", " + std::to_string(report.sensor_steps.size()) + " sensor steps marked")
+                << "\n";
     }
   };
   std::vector<std::thread> threads;
@@ -169,7 +173,7 @@ void RunBench(const BenchSettings& b) {
                           {"integrating", b.integrating}, {"excitation", b.excitation},
                           {"damping", b.damping}, {"noise_pole", b.noise_pole}, {"plants", b.plants}, {"only", b.only},
                           {"add_glitches", b.add_glitches}, {"glitches", b.glitches},
-                          {"add_drift", b.add_drift}, {"drift", b.drift},
+                          {"add_drift", b.add_drift}, {"drift", b.drift}, {"sensor_steps", b.sensor_steps},
                           {"single_cases", s.single_cases},
                           {"top1_accuracy", s.top1_accuracy}, {"false_alarm_rate", s.false_alarm_rate},
                           {"single_extra_effect", s.single_extra},
@@ -234,7 +238,7 @@ void RegisterGapCommand(CLI::App& app) {
   struct DiagnoseArgs {
     std::string sim;
     std::vector<std::string> data, validate;
-    std::string plots, u_name, y_name, time_name, glitches = "bridge", drift = "fit";
+    std::string plots, u_name, y_name, time_name, glitches = "bridge", drift = "fit", sensor_steps = "find";
     bool json = false;
   };
   auto d = std::make_shared<DiagnoseArgs>();
@@ -256,6 +260,11 @@ void RegisterGapCommand(CLI::App& app) {
                        "output offset where G0 neither integrates nor is fitted by multiple shooting; reported under "
                        "verdict.nuisance.output_drift) or none")
       ->check(CLI::IsMember({"fit", "none"}));
+  diagnose->add_option("--sensor-steps", d->sensor_steps,
+                       "find (default: where a record's output jumps to a new level and stays there while the model's "
+                       "output does not move, a sensor re-zeroed, the sensor gets a level of its own from there on; listed "
+                       "under \"sensor_steps\") or ignore")
+      ->check(CLI::IsMember({"find", "ignore"}));
   diagnose->add_flag("--json", d->json, "print the report as JSON (idrig.gap/1)");
   diagnose->add_option("--plots", d->plots, "also write SVG plots of the gap (frequency, amplitude, state, time, ranking) into this directory");
   diagnose->callback([d] {
@@ -272,6 +281,7 @@ void RegisterGapCommand(CLI::App& app) {
     GapOptions options;
     options.bridge_glitches = d->glitches == "bridge";
     options.fit_drift = d->drift == "fit";
+    options.find_sensor_steps = d->sensor_steps == "find";
     const GapReport report = DiagnoseGap(sim, estimation, validation, options);
     nlohmann::json out = GapReportToJson(report);
     out["sim"] = d->sim;
@@ -375,6 +385,8 @@ void RegisterGapCommand(CLI::App& app) {
       ->check(CLI::Range(0.0, 1e6));
   bench->add_option("--drift", b->drift, "fit (default, as gap diagnose does) or none: the sensor drift nuisance")
       ->check(CLI::IsMember({"fit", "none"}));
+  bench->add_option("--sensor-steps", b->sensor_steps, "find (default, as gap diagnose does) or ignore")
+      ->check(CLI::IsMember({"find", "ignore"}));
   bench->callback([b] { RunBench(*b); });
 }
 

@@ -63,11 +63,12 @@ Eigen::VectorXd EquilibratedSolve(const Eigen::MatrixXd& gram, const Eigen::Vect
 }
 
 // Least squares of r on [1, F] (F = the free response's first rows, zero below them): [b; x0].
-// With `ramp` (a sensor drift's column, as long as r): on [1, F, ramp], [b; x0; d].
+// With `extra` (the sensor's own columns, as long as r: a drift's ramp, a step's level): on
+// [1, F, extra], [b; x0; c].
 Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixXd& free_rows,
-                                  long* rank = nullptr, const Eigen::VectorXd* ramp = nullptr) {
+                                  long* rank = nullptr, const Eigen::MatrixXd* extra = nullptr) {
   const long len = r.size(), rows = std::min<long>(len, free_rows.rows()), n = free_rows.cols();
-  const long k = 1 + n + (ramp ? 1 : 0);
+  const long m = extra ? extra->cols() : 0, k = 1 + n + m;
   Eigen::MatrixXd gram(k, k);
   Eigen::VectorXd rhs(k);
   gram(0, 0) = double(len);
@@ -79,24 +80,32 @@ Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixX
     gram.block(1, 0, n, 1) = gram.block(0, 1, 1, n).transpose();
     rhs.segment(1, n) = f.transpose() * r.head(rows);
   }
-  if (ramp) {
-    gram(k - 1, k - 1) = ramp->squaredNorm();
-    gram(0, k - 1) = gram(k - 1, 0) = ramp->sum();
+  if (m > 0) {
+    const Eigen::MatrixXd& x = *extra;
+    gram.block(1 + n, 1 + n, m, m) = x.transpose() * x;
+    gram.block(0, 1 + n, 1, m) = x.colwise().sum();
+    gram.block(1 + n, 0, m, 1) = gram.block(0, 1 + n, 1, m).transpose();
     if (n > 0) {
-      gram.block(1, k - 1, n, 1) = free_rows.topRows(rows).transpose() * ramp->head(rows);
-      gram.block(k - 1, 1, 1, n) = gram.block(1, k - 1, n, 1).transpose();
+      gram.block(1, 1 + n, n, m) = free_rows.topRows(rows).transpose() * x.topRows(rows);
+      gram.block(1 + n, 1, m, n) = gram.block(1, 1 + n, n, m).transpose();
     }
-    rhs(k - 1) = ramp->dot(r);
+    rhs.tail(m) = x.transpose() * r;
   }
   return EquilibratedSolve(gram, rhs, rank);
 }
 
-// A sensor drift's column for a segment of `len` samples: (k − (len − 1)/2)·Ts, centred so that
-// the offset b stays the segment's mean level.
-Eigen::VectorXd Ramp(long len, double ts) {
-  Eigen::VectorXd ramp(len);
-  for (long k = 0; k < len; ++k) ramp(k) = (k - 0.5 * (len - 1)) * ts;
-  return ramp;
+// The sensor's own columns on a segment [start, start + len) of a record: a drift's ramp
+// (k − (len − 1)/2)·Ts, centred so that the offset b stays the segment's mean level (with
+// `drift`), then for every sensor step inside the segment the level it adds (0 before, 1 from it).
+Eigen::MatrixXd SensorColumns(const GapRecord& record, long start, long len, bool drift) {
+  std::vector<long> steps;
+  for (long s : record.sensor_steps)
+    if (s > start && s < start + len) steps.push_back(s - start);
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(len, (drift ? 1 : 0) + static_cast<long>(steps.size()));
+  if (drift)
+    for (long k = 0; k < len; ++k) x(k, 0) = (k - 0.5 * (len - 1)) * record.sample_time;
+  for (size_t i = 0; i < steps.size(); ++i) x.col((drift ? 1 : 0) + static_cast<long>(i)).tail(len - steps[i]).setOnes();
+  return x;
 }
 
 // The shooting segments of a record's scored samples, as (start, length): one, or every
@@ -360,35 +369,33 @@ namespace {
 // limits' start (the measured quantiles less one global offset) clipped nothing, and the fit of
 // the limits had no slope to follow.
 //
-// `ramp` (one entry per sample, or empty): a sensor drift d·ramp added after the maps, where the
-// sensor is (coef = [b, x0, d]); in the clip's coordinates a drifting reading would move the limits.
+// `extra` (the sensor's own columns, SensorColumns; or none): added after the maps, where the
+// sensor is (coef = [b, x0, c]); in the clip's coordinates a drifting reading would move the limits.
 Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen::VectorXd& z,
                                           const Eigen::MatrixXd& free, const std::vector<Effect>& maps,
                                           Eigen::VectorXd* fitted, bool offset_inside,
-                                          const Eigen::VectorXd& ramp) {
+                                          const Eigen::MatrixXd& extra) {
   const long len = y.size(), rows = std::min<long>(len, free.rows()), n = free.cols();
-  const bool drift = ramp.size() == len;  // a sensor drift d·ramp after the maps: coef = [b, x0, d]
+  const long m_extra = extra.rows() == len ? extra.cols() : 0;  // the sensor's columns after the maps
+  const Eigen::MatrixXd* sensor = m_extra > 0 ? &extra : nullptr;
   auto evaluate = [&](const Eigen::VectorXd& coef, Eigen::VectorXd& m, Eigen::VectorXd* slope) {
     m = z;
     if (n > 0) m.head(rows) += free.topRows(rows) * coef.segment(1, n);
     if (offset_inside) m.array() += coef(0);
     ApplyOutputMaps(maps, m, slope);
     if (!offset_inside) m.array() += coef(0);
-    if (drift) m += coef(1 + n) * ramp;
+    if (m_extra > 0) m += extra * coef.tail(m_extra);
     return (y - m).squaredNorm();
   };
-  // One Gauss–Newton step: b after the maps has slope 1; inside them, the maps' slope; the drift
-  // (after the maps) slope 1.
+  // One Gauss–Newton step: b after the maps has slope 1; inside them, the maps' slope; the
+  // sensor's columns (after the maps) slope 1.
   auto step = [&](const Eigen::VectorXd& r, const Eigen::VectorXd& slope) {
     if (!offset_inside)
-      return OffsetAndStateFit(r, slope.head(rows).asDiagonal() * free.topRows(rows), nullptr, drift ? &ramp : nullptr);
-    Eigen::MatrixXd design = Eigen::MatrixXd::Zero(len, 1 + n + (drift ? 1 : 0));
-    if (offset_inside)
-      design.col(0) = slope;
-    else
-      design.col(0).setOnes();
+      return OffsetAndStateFit(r, slope.head(rows).asDiagonal() * free.topRows(rows), nullptr, sensor);
+    Eigen::MatrixXd design = Eigen::MatrixXd::Zero(len, 1 + n + m_extra);
+    design.col(0) = slope;
     design.block(0, 1, rows, n) = slope.head(rows).asDiagonal() * free.topRows(rows);
-    if (drift) design.col(1 + n) = ramp;
+    if (m_extra > 0) design.rightCols(m_extra) = extra;
     return EquilibratedSolve(design.transpose() * design, design.transpose() * r);
   };
   // A fixed number of full steps, each kept only when it lowers the sum of squares: the result
@@ -407,15 +414,15 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
     }
     return coef;
   };
-  const long k = 1 + n + (drift ? 1 : 0);
+  const long k = 1 + n + m_extra;
   Eigen::VectorXd mapped = z;
   if (!offset_inside) ApplyOutputMaps(maps, mapped, nullptr);
   Eigen::VectorXd at_rest = Eigen::VectorXd::Zero(k);
   at_rest(0) = (y - mapped).mean();
   double sse_rest = INFINITY, sse_identity = INFINITY;
   Eigen::VectorXd coef = refine(at_rest, sse_rest);
-  if (n > 0 || drift) {
-    const Eigen::VectorXd other = refine(OffsetAndStateFit(y - z, free, nullptr, drift ? &ramp : nullptr), sse_identity);
+  if (n > 0 || m_extra > 0) {
+    const Eigen::VectorXd other = refine(OffsetAndStateFit(y - z, free, nullptr, sensor), sse_identity);
     if (sse_identity < sse_rest) coef = other;
   }
   // A |y| sensor on a plant whose free response holds a level (an integrator: F v ≈ 1): the
@@ -480,23 +487,24 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
       std::none_of(maps.begin(), maps.end(), [](const Effect& e) { return e.kind != EffectKind::kOutputSaturation; });
   for (size_t j = 0; j < segments.size(); ++j) {
     const auto [start, len] = segments[j];
-    // A sensor drift is a ramp beside the offset (after the output maps, where the sensor is).
-    const Eigen::VectorXd ramp = spec_.drift ? Ramp(len, record.sample_time) : Eigen::VectorXd();
-    const long n = free.cols();
+    // The sensor's own columns beside the offset (after the output maps, where the sensor is): a
+    // drift's ramp, the level each sensor step adds.
+    const Eigen::MatrixXd sensor = SensorColumns(record, start, len, spec_.drift);
+    const long n = free.cols(), m = sensor.cols();
     Eigen::VectorXd coef;
-    if (!maps.empty()) {  // the state inside the maps, the offset (and drift) after them
+    if (!maps.empty()) {  // the state inside the maps, the offset (and the sensor's columns) after them
       Eigen::VectorXd fitted;
       coef = OffsetAndStateThroughMaps(record.y.segment(start, len), y.segment(start, len), free, maps, &fitted,
-                                       offset_inside, ramp);
+                                       offset_inside, sensor);
       y.segment(start, len) = fitted;
     } else {
       coef = OffsetAndStateFit(record.y.segment(start, len) - y.segment(start, len), free, nullptr,
-                               spec_.drift ? &ramp : nullptr);
+                               m > 0 ? &sensor : nullptr);
       if (coef.allFinite()) {
         y.segment(start, len).array() += coef(0);
         const long rows = std::min<long>(len, free.rows());
         if (n > 0) y.segment(start, rows) += free.topRows(rows) * coef.segment(1, n);
-        if (spec_.drift) y.segment(start, len) += coef(1 + n) * ramp;
+        if (m > 0) y.segment(start, len) += sensor * coef.tail(m);
       }
     }
     if (nuisance && j == 0) {
@@ -504,9 +512,14 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
       nuisance->output_drift = spec_.drift ? coef(1 + n) : 0.0;
       nuisance->initial_state_rms = n > 0 ? coef.segment(1, n).norm() / std::sqrt(double(n)) : 0.0;
       nuisance->output_level.resize(record.y.size());
-      for (long k = 0; k < record.y.size(); ++k)
+      for (long k = 0; k < record.y.size(); ++k) {
         nuisance->output_level(k) =
             coef(0) + nuisance->output_drift * (k - start - 0.5 * (len - 1)) * record.sample_time;
+        if (m > (spec_.drift ? 1 : 0) && k >= start) {  // the sensor steps' levels, as of sample k
+          const long row = std::min(k - start, len - 1);
+          for (long i = spec_.drift ? 1 : 0; i < m; ++i) nuisance->output_level(k) += sensor(row, i) * coef(1 + n + i);
+        }
+      }
     }
   }
   // Quantisation last, as a smoothed staircase on the lattice the samples sit on (φ + k·q, φ
@@ -540,8 +553,8 @@ long Candidate::NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapR
                                                   : Eigen::MatrixXd(longest, 0);
     for (const auto& segment : segments) {
       long rank = 0;
-      const Eigen::VectorXd ramp = spec_.drift ? Ramp(segment.second, record.sample_time) : Eigen::VectorXd();
-      OffsetAndStateFit(Eigen::VectorXd::Zero(segment.second), free, &rank, spec_.drift ? &ramp : nullptr);
+      const Eigen::MatrixXd sensor = SensorColumns(record, segment.first, segment.second, spec_.drift);
+      OffsetAndStateFit(Eigen::VectorXd::Zero(segment.second), free, &rank, sensor.cols() > 0 ? &sensor : nullptr);
       columns += rank;
     }
   }

@@ -36,6 +36,9 @@ struct GapRecord {
   // Samples before `score_from` drive the simulation (warm-up) but are not scored: used when
   // a validation record is the second half of a record whose first half is for estimation.
   int score_from = 0;
+  // Samples where the sensor's level changes (a sensor step, found by DiagnoseGap): each adds an
+  // output level of its own from there on, fitted as a nuisance parameter beside the offset.
+  std::vector<long> sensor_steps;
 };
 
 struct GapOptions {
@@ -65,6 +68,9 @@ struct GapOptions {
   // A slow sensor drift (a ramp per record beside its offset) among the nuisance parameters, where
   // G0 is fitted by single shooting and does not integrate (ChooseFitScheme).
   bool fit_drift = true;
+  // Sensor steps (core/numeric/signal/level_shifts.h) found against G0 and against the diagnosed
+  // model, each an output level of its own from there on (GapRecord::sensor_steps); false: none.
+  bool find_sensor_steps = true;
 };
 
 struct BandGap {
@@ -191,9 +197,18 @@ struct GapGlitch {
   double value = 0, replaced_by = 0;
 };
 
+// A sensor step found in a record (core/numeric/signal/level_shifts.h), marked in it.
+struct GapSensorStep {
+  std::string records;   // "estimation" or "validation"
+  int record = 0;        // index among them (as given)
+  long sample = 0;       // the first sample at the new level
+  double size = 0;       // the new level less the old
+};
+
 struct GapReport {
   GapVerdict verdict;
   std::vector<GapGlitch> glitches;    // output glitches bridged before fitting
+  std::vector<GapSensorStep> sensor_steps;  // marked before fitting
   std::vector<CandidateFit> ranking;  // best first
   GapWhere where;
   std::vector<std::string> notes;     // what was assumed (e.g. "split in time at 50 %")

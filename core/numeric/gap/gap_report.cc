@@ -6,10 +6,12 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 
 #include "core/numeric/gap/gap_internal.h"
+#include "core/numeric/signal/level_shifts.h"
 #include "core/numeric/signal/outliers.h"
 #include "core/numeric/validation.h"
 
@@ -267,6 +269,9 @@ void SplitRecord(const GapRecord& record, std::vector<GapRecord>& estimation,
   est.u = record.u.head(half);
   est.y = record.y.head(half);
   est.score_from = 0;
+  est.sensor_steps.clear();
+  for (long s : record.sensor_steps)
+    if (s < half) est.sensor_steps.push_back(s);
   GapRecord val = record;
   val.score_from = static_cast<int>(half);
   estimation.push_back(est);
@@ -304,14 +309,63 @@ std::vector<GapRecord> BridgeGlitches(const std::vector<GapRecord>& records, con
   return out;
 }
 
+// Marks every record's sensor steps (core/numeric/signal/level_shifts.h) against a model's
+// output: each step adds an output level of its own from there on (GapRecord::sensor_steps, a
+// nuisance column of every candidate); the simulation runs through it, so a plant's state (a
+// friction's stick position, a backlash's side) carries over. A step nearer than `min_part`
+// samples to the record's start or end, or to another step, is not marked (said in the notes).
+std::vector<GapRecord> MarkSensorSteps(const std::vector<GapRecord>& records, const char* set,
+                                       const std::function<Eigen::VectorXd(const GapRecord&)>& model,
+                                       const std::string& model_name, long min_part, GapReport& report) {
+  std::vector<GapRecord> out = records;
+  for (size_t i = 0; i < out.size(); ++i) {
+    GapRecord& r = out[i];
+    const long n = r.y.size();
+    if (r.u.size() != n || r.score_from != 0 || !(r.sample_time > 0) || !r.y.allFinite() || !r.u.allFinite())
+      continue;  // refused or split later (CheckRecords, SplitRecord)
+    Eigen::VectorXd y_model;
+    try {
+      y_model = model(r);
+    } catch (const std::exception&) {
+      continue;
+    }
+    const std::string name = std::string(set) + " record " + std::to_string(i + 1);
+    for (const LevelShift& step : FindSensorSteps(r.y, y_model)) {
+      std::ostringstream msg;
+      msg << name << ": the output jumps by " << step.size << " at sample " << step.sample
+          << " and stays there, while " << model_name << " does not move (a sensor re-zeroed or knocked)";
+      long last = 0;
+      for (long s : r.sensor_steps) last = std::max(last, s <= step.sample ? s : 0L);
+      const bool near = step.sample - last < min_part || n - step.sample < min_part ||
+                        std::any_of(r.sensor_steps.begin(), r.sensor_steps.end(),
+                                    [&](long s) { return std::abs(s - step.sample) < min_part; });
+      if (near) {
+        msg << "; too near the record's ends or another step (" << min_part << " samples): not marked";
+      } else {
+        msg << ": a sensor level of its own from there on (a nuisance parameter of every candidate)";
+        r.sensor_steps.push_back(step.sample);
+        std::sort(r.sensor_steps.begin(), r.sensor_steps.end());
+        report.sensor_steps.push_back({set, static_cast<int>(i), step.sample, step.size});
+      }
+      report.notes.push_back(msg.str());
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
-GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRecord>& estimation_raw,
-                      const std::vector<GapRecord>& validation_raw, const GapOptions& options) {
+namespace {
+
+constexpr double kStepSearchAboveFloor = 1.5;  // nrmse_after / noise floor for the second search
+constexpr double kStepGainRequired = 0.8;      // the steps' diagnosis must end below this share
+
+GapReport DiagnoseGapOnce(const TransferFunction& sim_model, const std::vector<GapRecord>& estimation_raw,
+                          const std::vector<GapRecord>& validation_raw, const GapOptions& options) {
   GapReport report;
-  const std::vector<GapRecord> estimation_in =
+  std::vector<GapRecord> estimation_in =
       options.bridge_glitches ? BridgeGlitches(estimation_raw, "estimation", report) : estimation_raw;
-  const std::vector<GapRecord> validation_in =
+  std::vector<GapRecord> validation_in =
       options.bridge_glitches ? BridgeGlitches(validation_raw, "validation", report) : validation_raw;
   if (estimation_in.empty()) Fail("no estimation records");
   const double ts = estimation_in.front().sample_time;
@@ -319,6 +373,15 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const TransferFunction g0 = ContinuousSimModel(sim_model, ts);
   const int order = g0.Order();
   const int min_samples = std::max(20, 10 * (order + 4));
+  if (options.find_sensor_steps) {
+    const auto g0_output = [&](const GapRecord& r) {
+      EffectSimulationOptions sim;
+      sim.substeps = 1;
+      return SimulateWithEffect(g0, Effect{}, r.u, r.sample_time, sim);
+    };
+    estimation_in = MarkSensorSteps(estimation_in, "estimation", g0_output, "the sim model's output", min_samples, report);
+    validation_in = MarkSensorSteps(validation_in, "validation", g0_output, "the sim model's output", min_samples, report);
+  }
 
   std::vector<GapRecord> estimation, validation;
   if (validation_in.empty()) {
@@ -747,6 +810,64 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   report.where.lattice = lattice;
   report.where.detection_lines = AnalyseDetectionLines(all_records, &g0);
   return report;
+}
+
+}  // namespace
+
+// A sensor step is looked for against G0 first (DiagnoseGapOnce); one that a large gap hides
+// stands out of what the diagnosed model leaves: then it is marked and the records are
+// diagnosed again, once.
+GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRecord>& estimation_raw,
+                      const std::vector<GapRecord>& validation_raw, const GapOptions& options) {
+  GapReport first = DiagnoseGapOnce(sim_model, estimation_raw, validation_raw, options);
+  const GapVerdict& v = first.verdict;
+  // Only where the diagnosed model leaves the validation records well above the noise floor: a
+  // step left in the records would; a fit at the floor has no step to find (and its residual's
+  // spread is so small that a sharp model mismatch, a backlash taking up its play, could pass).
+  if (!options.find_sensor_steps || v.effect == "none" || v.effect == "unexplained" || v.plant.den.size() == 0 ||
+      !(v.nrmse_after > kStepSearchAboveFloor * v.noise_nrmse))
+    return first;
+  const double ts = estimation_raw.front().sample_time;
+  const long min_samples = std::max(20, 10 * (ContinuousSimModel(sim_model, ts).Order() + 4));
+  const double du = v.nuisance.input_offset_fitted ? v.nuisance.input_offset : 0.0;
+  const auto diagnosed = [&](const GapRecord& r) {
+    EffectSimulationOptions sim;
+    sim.substeps = options.substeps;
+    return SimulateWithEffects(v.plant, v.effects, Eigen::VectorXd(r.u.array() + du), r.sample_time, sim);
+  };
+  GapReport cuts;
+  const std::string name = "the diagnosed model's output (" + v.effect + ")";
+  std::vector<GapRecord> estimation = estimation_raw, validation = validation_raw;
+  if (options.bridge_glitches) {
+    estimation = BridgeGlitches(estimation_raw, "estimation", cuts);
+    validation = BridgeGlitches(validation_raw, "validation", cuts);
+    cuts = GapReport{};
+  }
+  estimation = MarkSensorSteps(estimation, "estimation", diagnosed, name, min_samples, cuts);
+  validation = MarkSensorSteps(validation, "validation", diagnosed, name, min_samples, cuts);
+  if (cuts.sensor_steps.empty()) return first;
+  GapOptions again = options;
+  again.bridge_glitches = false;  // bridged above
+  GapReport second = DiagnoseGapOnce(sim_model, estimation, validation, again);
+  // Kept only when the steps explain a good part of what was left: the validation NRMSE falls
+  // by a fifth or more (a step is a level change the records carry for hundreds of samples).
+  if (!(second.verdict.nrmse_after < kStepGainRequired * v.nrmse_after)) {
+    std::ostringstream msg;
+    msg << "sensor steps found against the diagnosed model (" << cuts.sensor_steps.size()
+        << ") were not kept: with them the validation NRMSE is " << second.verdict.nrmse_after << " against "
+        << v.nrmse_after;
+    first.notes.push_back(msg.str());
+    return first;
+  }
+  second.glitches = first.glitches;
+  second.sensor_steps.insert(second.sensor_steps.begin(), cuts.sensor_steps.begin(), cuts.sensor_steps.end());
+  std::vector<std::string> notes = cuts.notes;
+  notes.push_back("diagnosed again with those sensor steps (the first diagnosis, without them, said " + v.effect + ")");
+  for (const auto& g : first.notes)
+    if (g.find("glitch") != std::string::npos) notes.push_back(g);
+  notes.insert(notes.end(), second.notes.begin(), second.notes.end());
+  second.notes = notes;
+  return second;
 }
 
 }  // namespace idrig

@@ -675,5 +675,41 @@ INSTANTIATE_TEST_SUITE_P(Rigs, GapDriftTest,
                            return std::string(EffectName(info.param.truth)) + "_" + std::to_string(info.param.seed);
                          });
 
+// A sensor re-zeroed part way through both records (8 noise sigmas at sample 1500 of the
+// estimation record, −8 at 2500 of the validation record). Against G0 a friction case's step is
+// smaller than what the missing friction leaves; the diagnosed model's residual shows it, and
+// with the step a level of its own (the simulation running through it: the mass's stick
+// position carries over) the friction is named at the floor. Without it the validation NRMSE stays
+// twice the floor (docs/gap.md, stop 28).
+class GapSensorStepTest : public ::testing::TestWithParam<DriftCase> {};
+
+TEST_P(GapSensorStepTest, AReZeroedSensorIsALevelOfItsOwnNotAnEffect) {
+  GapCase c = LevelsCase(GetParam().truth, GetParam().seed, 4000);
+  const double step = 8 * c.noise_sigma;
+  c.estimation.y.tail(2500).array() += step;
+  c.validation.y.tail(1500).array() -= step;
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {c.validation});
+  const GapVerdict& v = report.verdict;
+  std::printf("sensor step: truth %-17s verdict %-20s [%zu effects] NRMSE %.4f -> %.4f floor %.4f, %zu steps\n",
+              EffectName(c.truth), v.effect.c_str(), v.effects.size(), v.nrmse_before, v.nrmse_after, v.noise_nrmse,
+              report.sensor_steps.size());
+  EXPECT_EQ(v.effect, EffectName(c.truth));
+  ASSERT_EQ(report.sensor_steps.size(), 2u);
+  for (const GapSensorStep& s : report.sensor_steps) {
+    const bool est = s.records == "estimation";
+    EXPECT_NEAR(s.sample, est ? 1500 : 2500, 1);
+    EXPECT_NEAR(s.size, est ? step : -step, 2.5 * c.noise_sigma);
+  }
+  EXPECT_LT(v.nrmse_after, 1.3 * v.noise_nrmse) << "the step is left in the residual";
+}
+
+INSTANTIATE_TEST_SUITE_P(Rigs, GapSensorStepTest,
+                         ::testing::Values(DriftCase{EffectKind::kNone, 371},
+                                           DriftCase{EffectKind::kCoulombFriction, 364},
+                                           DriftCase{EffectKind::kTimeDelay, 363}),
+                         [](const auto& info) {
+                           return std::string(EffectName(info.param.truth)) + "_" + std::to_string(info.param.seed);
+                         });
+
 }  // namespace
 }  // namespace idrig
