@@ -171,6 +171,7 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
   GapOptions inner_options = *ctx.options;
   inner_options.check_linear_order = false;
   inner_options.bridge_glitches = false;  // bridged already
+  inner_options.find_sensor_steps = false;  // the records carry this diagnosis's steps
   // The same fit scheme as here (the part of order n0 + 2 may decay faster than G0, and would get
   // single shooting): its NRMSEs and BICs are compared with this diagnosis's.
   inner_options.fixed_segment = ctx.nuisance.segment;
