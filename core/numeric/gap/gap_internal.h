@@ -56,8 +56,9 @@ struct Nuisance {
   double input_offset = 0, output_offset = 0;  // du, and b of the first segment
   double output_drift = 0;                     // d of the first segment [y units/s] (spec.drift)
   double initial_state_rms = 0;                // RMS of the first segment's x0 (realisation units)
-  // The sensor's level b + d·(t − t_mid) at every sample of the record (the first segment's b, d),
-  // for putting measured outputs into the plant's coordinates.
+  // The sensor's level at every sample of the record — b + d·(t − t_mid) plus the levels its
+  // sensor steps add (the first segment's coefficients) — for putting measured outputs into the
+  // plant's coordinates.
   Eigen::VectorXd output_level;
 };
 

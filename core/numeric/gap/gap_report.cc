@@ -360,13 +360,10 @@ namespace {
 constexpr double kStepSearchAboveFloor = 1.5;  // nrmse_after / noise floor for the second search
 constexpr double kStepGainRequired = 0.8;      // the steps' diagnosis must end below this share
 
-GapReport DiagnoseGapOnce(const TransferFunction& sim_model, const std::vector<GapRecord>& estimation_raw,
-                          const std::vector<GapRecord>& validation_raw, const GapOptions& options) {
-  GapReport report;
-  std::vector<GapRecord> estimation_in =
-      options.bridge_glitches ? BridgeGlitches(estimation_raw, "estimation", report) : estimation_raw;
-  std::vector<GapRecord> validation_in =
-      options.bridge_glitches ? BridgeGlitches(validation_raw, "validation", report) : validation_raw;
+// The diagnosis on records whose glitches are bridged already (`report` carries what the
+// bridging said).
+GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapRecord> estimation_in,
+                          std::vector<GapRecord> validation_in, const GapOptions& options, GapReport report) {
   if (estimation_in.empty()) Fail("no estimation records");
   const double ts = estimation_in.front().sample_time;
   if (!(ts > 0)) Fail("the records' sample time must be positive");
@@ -819,7 +816,12 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, const std::vector<G
 // diagnosed again, once.
 GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRecord>& estimation_raw,
                       const std::vector<GapRecord>& validation_raw, const GapOptions& options) {
-  GapReport first = DiagnoseGapOnce(sim_model, estimation_raw, validation_raw, options);
+  GapReport bridged;  // the glitches bridged, once for both diagnoses
+  const std::vector<GapRecord> estimation =
+      options.bridge_glitches ? BridgeGlitches(estimation_raw, "estimation", bridged) : estimation_raw;
+  const std::vector<GapRecord> validation =
+      options.bridge_glitches ? BridgeGlitches(validation_raw, "validation", bridged) : validation_raw;
+  GapReport first = DiagnoseGapOnce(sim_model, estimation, validation, options, bridged);
   const GapVerdict& v = first.verdict;
   // Only where the diagnosed model leaves the validation records well above the noise floor: a
   // step left in the records would; a fit at the floor has no step to find (and its residual's
@@ -827,7 +829,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   if (!options.find_sensor_steps || v.effect == "none" || v.effect == "unexplained" || v.plant.den.size() == 0 ||
       !(v.nrmse_after > kStepSearchAboveFloor * v.noise_nrmse))
     return first;
-  const double ts = estimation_raw.front().sample_time;
+  const double ts = estimation.front().sample_time;
   const long min_samples = std::max(20, 10 * (ContinuousSimModel(sim_model, ts).Order() + 4));
   const double du = v.nuisance.input_offset_fitted ? v.nuisance.input_offset : 0.0;
   const auto diagnosed = [&](const GapRecord& r) {
@@ -835,38 +837,31 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
     sim.substeps = options.substeps;
     return SimulateWithEffects(v.plant, v.effects, Eigen::VectorXd(r.u.array() + du), r.sample_time, sim);
   };
-  GapReport cuts;
+  GapReport marks;
   const std::string name = "the diagnosed model's output (" + v.effect + ")";
-  std::vector<GapRecord> estimation = estimation_raw, validation = validation_raw;
-  if (options.bridge_glitches) {
-    estimation = BridgeGlitches(estimation_raw, "estimation", cuts);
-    validation = BridgeGlitches(validation_raw, "validation", cuts);
-    cuts = GapReport{};
-  }
-  estimation = MarkSensorSteps(estimation, "estimation", diagnosed, name, min_samples, cuts);
-  validation = MarkSensorSteps(validation, "validation", diagnosed, name, min_samples, cuts);
-  if (cuts.sensor_steps.empty()) return first;
-  GapOptions again = options;
-  again.bridge_glitches = false;  // bridged above
-  GapReport second = DiagnoseGapOnce(sim_model, estimation, validation, again);
+  const std::vector<GapRecord> estimation_marked =
+      MarkSensorSteps(estimation, "estimation", diagnosed, name, min_samples, marks);
+  const std::vector<GapRecord> validation_marked =
+      MarkSensorSteps(validation, "validation", diagnosed, name, min_samples, marks);
+  if (marks.sensor_steps.empty()) return first;
+  // The notes: the bridging's, then these marks and why the records were diagnosed again, then
+  // the second diagnosis's own.
+  GapReport seeded = bridged;
+  seeded.notes.insert(seeded.notes.end(), marks.notes.begin(), marks.notes.end());
+  seeded.notes.push_back("diagnosed again with those sensor steps (the first diagnosis, without them, said " +
+                         v.effect + ")");
+  seeded.sensor_steps = marks.sensor_steps;
+  GapReport second = DiagnoseGapOnce(sim_model, estimation_marked, validation_marked, options, seeded);
   // Kept only when the steps explain a good part of what was left: the validation NRMSE falls
   // by a fifth or more (a step is a level change the records carry for hundreds of samples).
   if (!(second.verdict.nrmse_after < kStepGainRequired * v.nrmse_after)) {
     std::ostringstream msg;
-    msg << "sensor steps found against the diagnosed model (" << cuts.sensor_steps.size()
+    msg << "sensor steps found against the diagnosed model (" << marks.sensor_steps.size()
         << ") were not kept: with them the validation NRMSE is " << second.verdict.nrmse_after << " against "
         << v.nrmse_after;
     first.notes.push_back(msg.str());
     return first;
   }
-  second.glitches = first.glitches;
-  second.sensor_steps.insert(second.sensor_steps.begin(), cuts.sensor_steps.begin(), cuts.sensor_steps.end());
-  std::vector<std::string> notes = cuts.notes;
-  notes.push_back("diagnosed again with those sensor steps (the first diagnosis, without them, said " + v.effect + ")");
-  for (const auto& g : first.notes)
-    if (g.find("glitch") != std::string::npos) notes.push_back(g);
-  notes.insert(notes.end(), second.notes.begin(), second.notes.end());
-  second.notes = notes;
   return second;
 }
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/numeric/signal/robust_stats.h"
+
 namespace idrig {
 namespace {
 
@@ -12,20 +14,6 @@ constexpr double kNoiseMultiple = 6.0;
 constexpr double kSharpShare = 0.5;
 constexpr double kIncrementMultiple = 3.0;
 constexpr double kPersistShare = 0.6;
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const auto mid = v.begin() + static_cast<long>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
-double RobustSpread(const std::vector<double>& v) {
-  const double m = Median(v);
-  std::vector<double> dev(v.size());
-  for (size_t i = 0; i < v.size(); ++i) dev[i] = std::abs(v[i] - m);
-  return 1.4826 * Median(dev);
-}
 
 double MedianOf(const Eigen::VectorXd& r, long a, long b) {  // [a, b)
   return Median(std::vector<double>(r.data() + a, r.data() + b));

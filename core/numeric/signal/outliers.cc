@@ -3,18 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/numeric/signal/robust_stats.h"
+
 namespace idrig {
 namespace {
 
 constexpr long kHalfWindow = 5;
 constexpr double kScaleMultiple = 12.0;
 constexpr double kSpanShare = 0.25;
-
-double Median(std::vector<double> v) {
-  const auto mid = v.begin() + static_cast<long>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 double QuantileOf(std::vector<double> v, double p) {
   const auto at = v.begin() + static_cast<long>(std::lround(p * static_cast<double>(v.size() - 1)));
