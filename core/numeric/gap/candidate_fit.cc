@@ -609,6 +609,53 @@ FitOutcome Minimise(const Residuals& residuals, Eigen::VectorXd x, int max_evalu
   return out;
 }
 
+// Which mode is the added one. The refitted plant times ω²/(s² + 2ζωs + ω²) is the same model
+// whichever of the two underdamped modes sits in the resonance block, and the fit may leave G0's
+// own mode there with the new one in the plant (`gap bench --samples 1500 --seed 802 --offsets`,
+// case 4: a 13 rad/s mode, ζ 0.084, reported as 3.14 rad/s, ζ 0.455, G0's mode, with the plant's
+// pair at 12.9 rad/s). The added mode is the one farther from G0's poles: when a pair of the
+// refitted plant lies more than twice as far from them (relative distance) as the block's mode,
+// the two are exchanged — the plant keeps its DC gain and the product does not change — and the
+// block's 1σ, which belonged to the other mode, is dropped.
+static void ReportAddedModeAsResonance(const TransferFunction& g0, CandidateFit& c) {
+  if (c.plant.sample_time != 0 || g0.sample_time != 0) return;
+  const Eigen::VectorXcd g0_poles = PolynomialRoots(g0.den);
+  if (g0_poles.size() == 0) return;
+  auto distance = [&](std::complex<double> z) {
+    double d = INFINITY;
+    for (long i = 0; i < g0_poles.size(); ++i)
+      d = std::min(d, std::abs(z - g0_poles(i)) / std::max({std::abs(z), std::abs(g0_poles(i)), 1e-12}));
+    return d;
+  };
+  for (size_t b = 0; b < c.effects.size(); ++b) {
+    Effect& e = c.effects[b];
+    if (e.kind != EffectKind::kUnmodelledResonance || e.params.size() < 2 || !(e.params[1] < 1)) continue;
+    const double wr = e.params[0], zr = e.params[1];
+    const std::complex<double> r(-zr * wr, wr * std::sqrt(1 - zr * zr));
+    Eigen::VectorXcd poles = PolynomialRoots(c.plant.den);
+    long far = -1;
+    for (long i = 0; i < poles.size(); ++i)
+      if (poles(i).imag() > 1e-9 * std::abs(poles(i)) && (far < 0 || distance(poles(i)) > distance(poles(far)))) far = i;
+    if (far < 0 || !(distance(poles(far)) > 2 * distance(r))) continue;
+    const std::complex<double> q = poles(far);
+    long twin = -1;  // its conjugate
+    for (long i = 0; i < poles.size(); ++i)
+      if (i != far && (twin < 0 || std::abs(poles(i) - std::conj(q)) < std::abs(poles(twin) - std::conj(q)))) twin = i;
+    if (twin < 0) continue;
+    poles(far) = r;
+    poles(twin) = std::conj(r);
+    const double wq = std::abs(q);
+    c.plant.num *= (wr * wr) / (wq * wq);
+    c.plant.den = c.plant.den(0) * PolynomialFromRoots(poles);
+    e.params = {wq, -q.real() / wq};
+    if (b < c.effects_std.size()) c.effects_std[b] = {kNan, kNan};
+    if (b == 0) {
+      c.effect = e;
+      c.param_std = b < c.effects_std.size() ? c.effects_std[b] : std::vector<double>{};
+    }
+  }
+}
+
 // A starting point: the prefix (plant, du, the earlier effects' φ) and the last effect's start.
 static Eigen::VectorXd StartPoint(const Candidate& cand, const Eigen::VectorXd& prefix, const std::vector<double>& start) {
   const size_t last = cand.Blocks() - 1;
@@ -730,6 +777,7 @@ void FitSpec(const FitContext& ctx, const CandidateSpec& spec,
   while (c.effects_std.size() < c.effects.size())
     c.effects_std.push_back(std::vector<double>(EffectParameterNames(c.effects[c.effects_std.size()].kind).size(), kNan));
   c.param_std = c.effects_std.empty() ? std::vector<double>{} : c.effects_std.front();
+  ReportAddedModeAsResonance(*ctx.g0, c);
   c.evaluations += evaluations;
 }
 
