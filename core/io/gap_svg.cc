@@ -47,7 +47,6 @@ std::string FactorChart(const std::string& title, const std::string& x_label,
 std::string LinesChart(const nlohmann::json& lines) {
   const int width = 760, height = 420, left = 70, right = 20, top = 40, bottom = 60;
   const int plot_w = width - left - right, plot_h = height - top - bottom;
-  auto db = [](double p) { return p > 0 ? 10 * std::log10(p) : -300.0; };
   double f_max = 0, hi = -300, lo = 300;
   for (const auto& l : lines) {
     f_max = std::max(f_max, l.at("f_hz").get<double>());

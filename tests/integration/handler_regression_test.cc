@@ -158,7 +158,7 @@ TEST(HandlerRegression, ExciteSurvivesARequestThatIsNotUtf8) {
   request.rig_id = "sim1";
   request.experiment_id = 3;
   request.action = experiment_request_t::ACTION_START;
-  request.signal_spec = "pr\xff\xfebs:bits=10";
+  request.signal_spec = "pr\xff\xfe" "bs:bits=10";
   request.sample_rate_hz = 100;
   request.duration_s = 2;
   request.speed = 1;
