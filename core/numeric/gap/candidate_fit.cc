@@ -648,11 +648,8 @@ static void ReportAddedModeAsResonance(const TransferFunction& g0, CandidateFit&
     c.plant.num *= (wr * wr) / (wq * wq);
     c.plant.den = c.plant.den(0) * PolynomialFromRoots(poles);
     e.params = {wq, -q.real() / wq};
-    if (b < c.effects_std.size()) c.effects_std[b] = {kNan, kNan};
-    if (b == 0) {
-      c.effect = e;
-      c.param_std = b < c.effects_std.size() ? c.effects_std[b] : std::vector<double>{};
-    }
+    c.effects_std[b] = {kNan, kNan};  // FitSpec gives every effect its row
+    if (b == 0) c.effect = e, c.param_std = c.effects_std[0];
   }
 }
 

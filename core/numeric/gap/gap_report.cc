@@ -115,14 +115,20 @@ double SlowTimeConstant(const TransferFunction& plant, double ts, double duratio
   return std::clamp(slow, 2 * ts, duration);
 }
 
+// Samples scored in the longest of the records (after its warm-up).
+long LongestScored(const std::vector<GapRecord>& records) {
+  long longest = 0;
+  for (const auto& r : records) longest = std::max<long>(longest, r.u.size() - r.score_from);
+  return longest;
+}
+
 // Multiple shooting when G0 integrates or is lightly damped: the slowest mode decays by less
 // than e^-5 over the longest record, so an open-loop simulation from a wrong state (or with a
 // small input bias) drifts. Segments of max(N/8, 100·(n+1)) samples each get a free state;
 // a true integrator (a pole within 1e-6/Ts of 0) also gets an input offset in every candidate.
 void ChooseFitScheme(const TransferFunction& g0, const std::vector<GapRecord>& estimation, double ts,
                      FitContext& ctx) {
-  long longest = 0;
-  for (const auto& r : estimation) longest = std::max<long>(longest, r.u.size() - r.score_from);
+  const long longest = LongestScored(estimation);
   const Eigen::VectorXcd p = Poles(g0);
   double slowest = INFINITY;
   bool integrator = false;
@@ -596,9 +602,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
   // has little power on a short record (`gap bench --samples 1500 --seed 802 --offsets`, case 4:
   // a 13 rad/s mode, ζ 0.084, ζω·T = 16; N·R² 48.9 against 49.2, the mode set aside and the
   // verdict a delay at 0.072 for a floor of 0.035).
-  double longest_val_s = 0;
-  for (const GapRecord& r : validation)
-    longest_val_s = std::max(longest_val_s, double(r.u.size() - r.score_from) * r.sample_time);
+  const double longest_val_s = LongestScored(validation) * ts;
   auto mode_lasts = [&](const Effect& e) {
     return e.params.size() >= 2 && !(e.params[0] * e.params[1] * longest_val_s > std::log(100.0));
   };
