@@ -1,7 +1,7 @@
 // idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--glitches bridge|keep]
 //                    [--drift fit|none] [--sensor-steps find|ignore] [--json]
 // idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--ts S] [--jobs J] [--offsets] [--combos F]
-//                 [--excitation K] [--integrating] [--plants zeros|two-mass] [--damping LO,HI] [--noise-pole A]
+//                 [--pairs rig|any] [--excitation K] [--integrating] [--plants zeros|two-mass] [--damping LO,HI] [--noise-pole A]
 //                 [--add-glitches N] [--glitches bridge|keep] [--add-drift S] [--drift fit|none]
 //                 [--sensor-steps find|ignore] [--dump DIR] [--json]
 #include <algorithm>
@@ -76,6 +76,7 @@ struct BenchSettings {
   int add_glitches = 0;
   double add_drift = 0;
   std::string dump, excitation, plants, glitches = "bridge", drift = "fit", sensor_steps = "find";
+  std::string pairs = "rig";      // rig: the pairs that occur together on rigs; any: every pair
   std::vector<std::string> only;  // keep the cases that withhold one of these effects
 };
 
@@ -118,7 +119,7 @@ void RunBench(const BenchSettings& b) {
     }
     if (i > 1000 * b.cases)
       throw std::invalid_argument("gap bench: --only keeps no case of this sequence (with --combos 1 there is no single case)");
-    const std::vector<EffectKind> truth = BenchCaseTruth(i, b.combos);
+    const std::vector<EffectKind> truth = BenchCaseTruth(i, b.combos, b.pairs == "any");
     const bool kept = std::any_of(b.only.begin(), b.only.end(), [&](const std::string& name) {
       return std::any_of(truth.begin(), truth.end(), [&](EffectKind k) { return name == EffectName(k); });
     });
@@ -132,7 +133,7 @@ void RunBench(const BenchSettings& b) {
     for (int slot = next++; slot < b.cases; slot = next++) {
       const int i = indices[slot];
       std::mt19937_64 rng(BenchCaseSeed(b.seed, i));
-      const std::vector<EffectKind> truth = BenchCaseTruth(i, b.combos);
+      const std::vector<EffectKind> truth = BenchCaseTruth(i, b.combos, b.pairs == "any");
       const GapCase c = MakeGapCase(truth, rng, case_options);
       if (!b.dump.empty()) WriteCase(c, b.dump, i);
       const auto start = std::chrono::steady_clock::now();
@@ -169,7 +170,7 @@ void RunBench(const BenchSettings& b) {
   const GapBenchScore s = ScoreGapBench(outcomes);
   if (b.json) {
     nlohmann::json out = {{"cases", b.cases}, {"seed", b.seed}, {"snr_db", b.snr}, {"samples", b.samples}, {"sample_time", b.sample_time},
-                          {"offsets", b.offsets}, {"combos", b.combos},
+                          {"offsets", b.offsets}, {"combos", b.combos}, {"pairs", b.pairs},
                           {"integrating", b.integrating}, {"excitation", b.excitation},
                           {"damping", b.damping}, {"noise_pole", b.noise_pole}, {"plants", b.plants}, {"only", b.only},
                           {"add_glitches", b.add_glitches}, {"glitches", b.glitches},
@@ -199,7 +200,7 @@ void RunBench(const BenchSettings& b) {
             << (b.add_glitches ? ", " + std::to_string(b.add_glitches) + " glitches per record (" + b.glitches + ")" : "")
             << (b.add_drift > 0 ? ", a sensor drift of " + std::to_string(b.add_drift) + " noise sigmas per record" : "")
             << (b.drift == "none" ? ", drift not fitted" : "")
-            << ", two-effect share " << b.combos
+            << ", two-effect share " << b.combos << (b.pairs == "any" ? " (any pair)" : "")
             << "\n"
             << "top-1 accuracy on single effects " << Rate(s.single_correct, s.single_cases) << "\n"
             << "false alarms on none " << Rate(s.false_alarms, s.none_cases) << "\n";
@@ -373,6 +374,10 @@ void RegisterGapCommand(CLI::App& app) {
                   "(10–100 % of the output range) on every case");
   bench->add_option("--combos", b->combos,
                     "share F in [0, 1] of the cases with two effects that occur together on rigs");
+  bench->add_option("--pairs", b->pairs,
+                    "which pairs the two-effect cases draw: rig (default: pairs that occur together on rigs) "
+                    "or any (every pair the rig can simulate together, 54)")
+      ->check(CLI::IsMember({"rig", "any"}));
   bench->add_option("--add-glitches", b->add_glitches,
                     "sensor or acquisition glitches per record: runs of 1-3 samples, a spike 2-20 output spans off, "
                     "a dropout to zero or a reading stuck beyond the range")

@@ -142,6 +142,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
     c.signature = test.signature;
   }
   MaskOneSidedDeadZone(ctx, pairs, 1);  // a one-sided second limit is a limit (ranking.cc)
+  MaskPeaklessResonance(pairs, 1);       // a second mode without a peak is a lag (ranking.cc)
   for (CandidateWork& w : pairs) {
     CandidateFit& c = w.fit;
     if (c.effects.size() < 2) continue;

@@ -502,14 +502,28 @@ const std::vector<std::string>& BenchExcitations() {
   return kinds;
 }
 
-std::vector<EffectKind> BenchCaseTruth(int index, double combo_share) {
+const std::vector<std::pair<EffectKind, EffectKind>>& AnyEffectPairs() {
+  static const std::vector<std::pair<EffectKind, EffectKind>> pairs = [] {
+    std::vector<EffectKind> effects;
+    for (EffectKind k : AllEffects())
+      if (k != EffectKind::kNone && k != EffectKind::kParameterMismatch) effects.push_back(k);
+    std::vector<std::pair<EffectKind, EffectKind>> all;
+    for (size_t i = 0; i < effects.size(); ++i)
+      for (size_t j = i + 1; j < effects.size(); ++j)
+        if (!(IsFeedbackEffect(effects[i]) && IsFeedbackEffect(effects[j]))) all.emplace_back(effects[i], effects[j]);
+    return all;
+  }();
+  return pairs;
+}
+
+std::vector<EffectKind> BenchCaseTruth(int index, double combo_share, bool any_pairs) {
   if (index < 0) throw std::invalid_argument("gap bench: negative case index");
   if (!(combo_share >= 0 && combo_share <= 1))
     throw std::invalid_argument("gap bench: the share of two-effect cases must be in [0, 1]");
   const auto combos_before = [&](long i) { return static_cast<long>(std::floor(i * combo_share + 1e-9)); };
   const long before = combos_before(index);
   if (combos_before(index + 1) > before) {
-    const auto& pairs = CoOccurringEffectPairs();
+    const auto& pairs = any_pairs ? AnyEffectPairs() : CoOccurringEffectPairs();
     const auto& p = pairs[before % pairs.size()];
     return {p.first, p.second};
   }

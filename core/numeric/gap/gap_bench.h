@@ -107,10 +107,16 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Eff
                             double output_offset = 0, double noise_pole = 0,
                             const Eigen::VectorXd& sensor_drift = Eigen::VectorXd());
 
-// The bench's plan: case `index` has a pair (CoOccurringEffectPairs in turn) for a share
-// `combo_share` of the cases, spread evenly, and otherwise a single effect (the vocabulary in
-// turn). combo_share = 0 gives the vocabulary in turn (index mod 13).
-std::vector<EffectKind> BenchCaseTruth(int index, double combo_share);
+// Every unordered pair of the effects (none and parameter_mismatch aside) that the rig can
+// simulate together — all but friction with a cubic spring (one feedback effect at most): 54
+// pairs, for a bench that does not assume which effects meet on a rig.
+const std::vector<std::pair<EffectKind, EffectKind>>& AnyEffectPairs();
+
+// The bench's plan: case `index` has a pair (CoOccurringEffectPairs in turn, or AnyEffectPairs
+// with `any_pairs`) for a share `combo_share` of the cases, spread evenly, and otherwise a
+// single effect (the vocabulary in turn). combo_share = 0 gives the vocabulary in turn
+// (index mod 13).
+std::vector<EffectKind> BenchCaseTruth(int index, double combo_share, bool any_pairs = false);
 // The excitations a case may ask for (GapCaseOptions::excitation): the three drawn by default
 // first, then those drawn only on request.
 const std::vector<std::string>& BenchExcitations();

@@ -114,6 +114,29 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
   }
 }
 
+// A resonance fitted with ζ at its bound 1/√2 (candidate_fit.cc) has no peak: its gain falls
+// monotonically from DC, the smooth low-pass of a lag or the phase of a delay, which is what it
+// then stands in for (`gap bench --cases 52 --seed 901 --offsets --combos 0.5`, case 49: a delay
+// of 0.047 s with a sensor map under PRBS, named a "resonance" at 30.9 rad/s, ζ = 0.7071, ahead
+// of the delay by 4 BIC). A missing mode of that kind is missing dynamics, for the linear order
+// check to name; the candidate is masked (not eligible, with a note).
+void MaskPeaklessResonance(std::vector<CandidateWork>& work, size_t slot) {
+  for (auto& w : work) {
+    if (w.fit.effects.size() != slot + 1) continue;
+    const Effect& e = w.fit.effects[slot];
+    if (e.kind != EffectKind::kUnmodelledResonance || e.params.size() < 2 ||
+        !(e.params[1] >= M_SQRT1_2 * (1 - 1e-9)))
+      continue;
+    w.masked = true;
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "set aside: the mode at %.4g rad/s fitted ζ at its bound 1/√2, no resonant peak "
+                  "(a low-pass standing in for a lag or a delay)",
+                  e.params[0]);
+    w.fit.note = line;
+  }
+}
+
 // A dead zone of half-width d after an actuator offset du is flat for u + du ∈ [−d, d]. When the
 // records reach past only one end of that (under 1 % of the samples beyond the other), they show
 // one kink: a slope on one side, flat on the other — over the data the same map as a one-sided

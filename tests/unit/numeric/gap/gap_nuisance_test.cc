@@ -515,6 +515,30 @@ TEST(GapPlantFamilyTest, AResonanceOnAShortRecordIsNamedWithItsOwnModeNotG0s) {
   EXPECT_LE(report.verdict.nrmse_after, 1.2 * report.verdict.noise_nrmse);
 }
 
+TEST(GapOffsetTest, AModeWithoutAPeakIsNotNamedAResonance) {
+  // `idrig gap bench --cases 52 --seed 901 --offsets --combos 0.5`, case 49: a delay of 0.047 s
+  // and a cubic sensor map under PRBS. A "resonance" at 30.9 rad/s with ζ at its bound 1/√2 (no
+  // peak: a low-pass, the phase of the delay) beat the delay by 4 BIC and was named with the
+  // sensor map at the floor. A mode fitted without a peak is set aside.
+  const GapCase c = OffsetBenchCase(901, 49, BenchCaseTruth(49, 0.5));
+  ASSERT_EQ(c.effects.size(), 2u);
+  ASSERT_EQ(c.effects[0].kind, EffectKind::kTimeDelay);
+  ASSERT_EQ(c.effects[1].kind, EffectKind::kSensorNonlinearity);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const GapVerdict& v = report.verdict;
+  const CandidateFit& resonance = Ranked(report, EffectKind::kUnmodelledResonance);
+  std::printf("delay + sensor map: verdict %s (%zu effects), NRMSE %.4f floor %.4f; resonance zeta %.4f, note '%s'\n",
+              v.effect.c_str(), v.effects.size(), v.nrmse_after, v.noise_nrmse, resonance.effect.params.at(1),
+              resonance.note.c_str());
+  EXPECT_FALSE(resonance.eligible);
+  EXPECT_NE(resonance.note.find("no resonant peak"), std::string::npos);
+  ASSERT_EQ(v.effects.size(), 2u);
+  EXPECT_EQ(v.effects[0].kind, EffectKind::kTimeDelay);
+  EXPECT_EQ(v.effects[1].kind, EffectKind::kSensorNonlinearity);
+  EXPECT_NEAR(v.effects[0].params[0], c.effects[0].params[0], 0.03 * c.effects[0].params[0]);
+  EXPECT_LT(v.nrmse_after, 1.05 * v.noise_nrmse);
+}
+
 TEST(GapOffsetTest, ALimitTheValidationRecordsShowIsNotReleased) {
   // `idrig gap bench --cases 26 --seed 204 --offsets --plants zeros --combos 1`, case 18: an
   // actuator lag and an input saturation on a plant with a zero. 0.8 % of the estimation
