@@ -663,20 +663,23 @@ static Eigen::VectorXd StartPoint(const Candidate& cand, const Eigen::VectorXd& 
   return x0;
 }
 
-std::vector<std::vector<double>> BestStarts(const FitContext& ctx, const CandidateSpec& spec,
-                                            const Eigen::VectorXd& prefix,
-                                            const std::vector<std::vector<double>>& starts, size_t keep) {
-  if (starts.size() <= keep) return starts;
+std::vector<Eigen::VectorXd> BestStartPoints(const FitContext& ctx, const CandidateSpec& spec,
+                                             const std::vector<Eigen::VectorXd>& prefixes,
+                                             const std::vector<std::vector<double>>& starts, size_t keep) {
   const Candidate cand(*ctx.g0, spec, ctx.scales, ctx.options->substeps);
+  std::vector<Eigen::VectorXd> points;
+  for (const Eigen::VectorXd& prefix : prefixes)
+    for (const auto& start : starts) points.push_back(StartPoint(cand, prefix, start));
+  if (points.size() <= keep) return points;
   const Residuals residuals{&cand, ctx.estimation, ctx.n_est};
   std::vector<std::pair<double, size_t>> scored;
-  for (size_t i = 0; i < starts.size(); ++i) {
-    const double mse = Mse(residuals, StartPoint(cand, prefix, starts[i]));
+  for (size_t i = 0; i < points.size(); ++i) {
+    const double mse = Mse(residuals, points[i]);
     scored.push_back({std::isfinite(mse) ? mse : INFINITY, i});
   }
-  std::sort(scored.begin(), scored.end());
-  std::vector<std::vector<double>> best;
-  for (size_t i = 0; i < keep; ++i) best.push_back(starts[scored[i].second]);
+  std::stable_sort(scored.begin(), scored.end());
+  std::vector<Eigen::VectorXd> best;
+  for (size_t i = 0; i < keep; ++i) best.push_back(points[scored[i].second]);
   return best;
 }
 
@@ -704,17 +707,25 @@ CandidateSpec SpecFor(const FitContext& ctx, std::vector<EffectKind> kinds,
 void FitSpec(const FitContext& ctx, const CandidateSpec& spec,
              const std::vector<Eigen::VectorXd>& prefixes,
              const std::vector<std::vector<double>>& starts, CandidateWork& w) {
+  const Candidate cand(*ctx.g0, spec, ctx.scales, ctx.options->substeps);
+  std::vector<Eigen::VectorXd> points;
+  for (const Eigen::VectorXd& prefix : prefixes)
+    for (const auto& start : starts) points.push_back(StartPoint(cand, prefix, start));
+  FitSpecFrom(ctx, spec, points, w);
+}
+
+void FitSpecFrom(const FitContext& ctx, const CandidateSpec& spec, const std::vector<Eigen::VectorXd>& points,
+                 CandidateWork& w) {
   const GapOptions& options = *ctx.options;
   Candidate cand(*ctx.g0, spec, ctx.scales, options.substeps);
   Residuals residuals{&cand, ctx.estimation, ctx.n_est};
   FitOutcome best;
   int evaluations = 0;
-  for (const Eigen::VectorXd& prefix : prefixes)
-    for (const auto& start : starts) {
-      FitOutcome f = Minimise(residuals, StartPoint(cand, prefix, start), options.evaluations_per_start * (cand.Size() + 1));
-      evaluations += f.evaluations;
-      if (!(f.mse >= best.mse)) best = f;  // also takes the first (best.mse is NaN)
-    }
+  for (const Eigen::VectorXd& x0 : points) {
+    FitOutcome f = Minimise(residuals, x0, options.evaluations_per_start * (cand.Size() + 1));
+    evaluations += f.evaluations;
+    if (!(f.mse >= best.mse)) best = f;  // also takes the first (best.mse is NaN)
+  }
   FitOutcome polished = Minimise(residuals, best.x, options.evaluations_polish * (cand.Size() + 1));
   evaluations += polished.evaluations;
   if (polished.mse < best.mse) best = polished;

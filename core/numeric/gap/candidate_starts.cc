@@ -74,6 +74,11 @@ std::vector<std::vector<double>> GridStarts(EffectKind kind, const Scales& s) {
     case EffectKind::kCoulombFriction:
       for (double f : {0.01, 0.02, 0.05, 0.1, 0.15, 0.2, 0.3, 0.45, 0.6}) grid.push_back({f * s.u_max});
       break;
+    case EffectKind::kTimeDelay:
+      // The cost is many-valued in τ (each period of the response a basin): a grid a factor √2
+      // apart from one sample to 0.6 slow time constants.
+      for (double tau = s.ts; tau <= std::max(4 * s.ts, 0.6 * s.slow); tau *= M_SQRT2) grid.push_back({tau});
+      break;
     default:
       break;
   }

@@ -18,19 +18,20 @@ namespace {
 // length R of exp(2πi y/q); ≈ 1/√N without one): a smoothed staircase otherwise fits noise.
 constexpr double kLatticeStrength = 0.3;
 
-// Pairs that one simulation can hold: one input-side map, one output-side map, at most one
-// of each feedback term; a linear effect with anything. Not the same effect twice.
+// Pairs that one simulation can hold: not the same effect twice. Two input-side maps compose in
+// the order given (the second acts on the first's output): a limit after a dead zone is a limit
+// before it with the limits moved by the width, so either order holds the other's map; the same
+// for a clip and a monotone sensor map on the output side. Quantisation with another output map
+// is named from the samples' lattice (gap_lattice.cc), not fitted as a pair.
 bool Compatible(EffectKind a, EffectKind b) {
   if (a == b) return false;
-  auto input_side = [](EffectKind k) {
-    return k == EffectKind::kInputSaturation || k == EffectKind::kDeadZone || k == EffectKind::kBacklash;
-  };
   auto output_side = [](EffectKind k) {
     return k == EffectKind::kOutputSaturation || k == EffectKind::kSensorNonlinearity ||
            k == EffectKind::kOutputQuantization;
   };
-  if (input_side(a) && input_side(b)) return false;
-  if (output_side(a) && output_side(b)) return false;
+  if (output_side(a) && output_side(b) &&
+      (a == EffectKind::kOutputQuantization || b == EffectKind::kOutputQuantization))
+    return false;
   return true;
 }
 
@@ -62,14 +63,11 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   // is a gain and an offset, which the refitted plant and the output offset already hold: as a
   // second effect it could only absorb a small misfit of the first, so it is not tried.
   const bool two_valued = BinaryInput(*ctx.estimation) && BinaryInput(*ctx.validation);
-  auto input_static = [](EffectKind k) {
-    return k == EffectKind::kInputSaturation || k == EffectKind::kDeadZone || k == EffectKind::kBacklash;
-  };
   std::vector<EffectKind> seconds;
   for (EffectKind k : kinds)
     if (k != EffectKind::kNone && k != EffectKind::kParameterMismatch && Compatible(k1, k) &&
         (k != EffectKind::kOutputQuantization || ctx.q_strength >= kLatticeStrength) &&
-        !(two_valued && input_static(k)))
+        !(two_valued && IsInputMap(k)))
       seconds.push_back(k);
   // A resonance as the second effect must act through the input (gap_report.cc): when what the
   // first effect leaves on the validation records does not follow the input, a mode with a free
@@ -116,9 +114,14 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
       // the three with the lowest cost at the start are fitted.
       const auto grid = GridStarts(k2, ctx.scales);
       starts.insert(starts.end(), grid.begin(), grid.end());
-      starts = BestStarts(pair_ctx, spec, prefix, starts, 3);
+      // From the first's fit, and from G0 as given with the first effect's parameters: the
+      // first's plant has bent to mimic what the second effect does (a delay beside friction,
+      // taken by the plant's poles), a basin the pair fit does not leave.
+      Eigen::VectorXd from_g0 = prefix;
+      from_g0.head(base.PlantParams()).setZero();
+      const auto points = BestStartPoints(pair_ctx, spec, {prefix, from_g0}, starts, 3);
       CandidateWork trial;
-      FitSpec(pair_ctx, spec, {prefix}, starts, trial);
+      FitSpecFrom(pair_ctx, spec, points, trial);
       const double criterion = ctx.n_est * std::log(trial.fit.estimation_mse) +
                                trial.fit.parameters * std::log(double(ctx.n_est));
       if (criterion < best) best = criterion, pairs[i] = trial;

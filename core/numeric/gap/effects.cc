@@ -180,6 +180,10 @@ bool IsFeedbackEffect(EffectKind kind) {
   return kind == EffectKind::kCoulombFriction || kind == EffectKind::kCubicStiffness;
 }
 
+bool IsInputMap(EffectKind kind) {
+  return kind == EffectKind::kInputSaturation || kind == EffectKind::kDeadZone || kind == EffectKind::kBacklash;
+}
+
 void ValidateEffect(const Effect& effect) {
   const auto& names = EffectParameterNames(effect.kind);
   const std::string what = std::string("effect ") + EffectName(effect.kind);

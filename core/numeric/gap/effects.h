@@ -61,6 +61,7 @@ const std::vector<std::string>& EffectParameterNames(EffectKind kind);
 // Effects acting on the plant's input, on its output, or in feedback around it.
 bool IsLinearEffect(EffectKind kind);    // time_delay, actuator_lag, unmodelled_resonance
 bool IsFeedbackEffect(EffectKind kind);  // coulomb_friction, cubic_stiffness
+bool IsInputMap(EffectKind kind);        // input_saturation, dead_zone, backlash
 
 struct Effect {
   EffectKind kind = EffectKind::kNone;

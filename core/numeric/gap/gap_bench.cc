@@ -555,9 +555,7 @@ GapBenchScore ScoreGapBench(const std::vector<GapBenchOutcome>& outcomes) {
     const bool two_valued = o.excitation == "prbs" || o.excitation == "rbs";
     bool decidable = true;
     for (EffectKind k : o.truth)
-      if (two_valued && (k == EffectKind::kInputSaturation || k == EffectKind::kDeadZone ||
-                         k == EffectKind::kBacklash))
-        decidable = false;
+      if (two_valued && IsInputMap(k)) decidable = false;
     if (decidable && truth.size() == 1) {
       ++s.decidable_single_cases;
       if (o.verdict == truth[0]) ++s.decidable_single_correct;

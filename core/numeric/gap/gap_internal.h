@@ -247,6 +247,9 @@ CandidateSpec SpecFor(const FitContext& ctx, std::vector<EffectKind> kinds,
 void FitSpec(const FitContext& ctx, const CandidateSpec& spec,
              const std::vector<Eigen::VectorXd>& prefixes,
              const std::vector<std::vector<double>>& starts, CandidateWork& w);
+// The same from explicit starting points x0 (full parameter vectors).
+void FitSpecFrom(const FitContext& ctx, const CandidateSpec& spec, const std::vector<Eigen::VectorXd>& points,
+                 CandidateWork& w);
 
 // Fits one effect (not none, not parameter_mismatch), its variants, from its starts.
 void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w);
@@ -301,11 +304,11 @@ bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWo
 // no gradient where no sample reaches the break: a coarse grid over the tails of u or y (both
 // limits, or one), or over widths; physical units. Empty for the other effects.
 std::vector<std::vector<double>> GridStarts(EffectKind kind, const Scales& s);
-// The `keep` starts with the lowest estimation MSE when the last block of `spec` starts there and
-// the rest at `prefix` (one simulation each, no fit).
-std::vector<std::vector<double>> BestStarts(const FitContext& ctx, const CandidateSpec& spec,
-                                            const Eigen::VectorXd& prefix,
-                                            const std::vector<std::vector<double>>& starts, size_t keep);
+// Of every prefix times every start of the last block of `spec`, the `keep` starting points
+// with the lowest estimation MSE (one simulation each, no fit).
+std::vector<Eigen::VectorXd> BestStartPoints(const FitContext& ctx, const CandidateSpec& spec,
+                                             const std::vector<Eigen::VectorXd>& prefixes,
+                                             const std::vector<std::vector<double>>& starts, size_t keep);
 
 PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
                               const std::vector<EffectKind>& kinds);

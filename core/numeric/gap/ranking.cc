@@ -118,21 +118,26 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
 // monotonically from DC, the smooth low-pass of a lag or the phase of a delay, which is what it
 // then stands in for (`gap bench --cases 52 --seed 901 --offsets --combos 0.5`, case 49: a delay
 // of 0.047 s with a sensor map under PRBS, named a "resonance" at 30.9 rad/s, ζ = 0.7071, ahead
-// of the delay by 4 BIC). A missing mode of that kind is missing dynamics, for the linear order
-// check to name; the candidate is masked (not eligible, with a note).
+// of the delay by 4 BIC). The same when ζ is within two standard errors of the bound: the data
+// do not show a peak (`--seed 950 --combos 1 --pairs any --excitation levels`, case 0: a delay
+// with a lag, a mode of ζ 0.702 ± 0.005 named with the lag). A missing mode of that kind is
+// missing dynamics, for the linear order check to name; the candidate is masked (not eligible,
+// with a note).
 void MaskPeaklessResonance(std::vector<CandidateWork>& work, size_t slot) {
   for (auto& w : work) {
     if (w.fit.effects.size() != slot + 1) continue;
     const Effect& e = w.fit.effects[slot];
-    if (e.kind != EffectKind::kUnmodelledResonance || e.params.size() < 2 ||
-        !(e.params[1] >= M_SQRT1_2 * (1 - 1e-9)))
-      continue;
+    if (e.kind != EffectKind::kUnmodelledResonance || e.params.size() < 2) continue;
+    // At the bound, or within two standard errors of it: the data show no peak.
+    const double sd = w.fit.effects_std.size() > slot && w.fit.effects_std[slot].size() > 1
+                          ? w.fit.effects_std[slot][1] : NAN;
+    if (!(e.params[1] >= M_SQRT1_2 * (1 - 1e-9)) && !(e.params[1] + 2 * sd >= M_SQRT1_2)) continue;
     w.masked = true;
-    char line[200];
+    char line[320];
     std::snprintf(line, sizeof line,
-                  "set aside: the mode at %.4g rad/s fitted ζ at its bound 1/√2, no resonant peak "
-                  "(a low-pass standing in for a lag or a delay)",
-                  e.params[0]);
+                  "set aside: the mode at %.4g rad/s fitted ζ = %.4g, at its bound 1/√2 or within two "
+                  "standard errors of it: no resonant peak (a low-pass standing in for a lag or a delay)",
+                  e.params[0], e.params[1]);
     w.fit.note = line;
   }
 }
@@ -153,7 +158,15 @@ void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& wor
     if (w.fit.effects[slot].kind == EffectKind::kDeadZone) dead = &w;
     if (w.fit.effects[slot].kind == EffectKind::kInputSaturation) limit = &w;
   }
-  if (!dead || !limit || !limit->fit.significant || dead->fit.effects[slot].params.empty()) return;
+  // After another input-side map (a pair: the dead zone acts on that map's output), a one-sided
+  // kink is a limit on it whether or not the pair with a limit found it: from the first's
+  // actuator offset the limit's grid is placed in the command's coordinates, and a dead zone far
+  // off zero has stood in for a first effect's poorer fit (backlash under a chirp, `--seed 43
+  // --offsets --excitation chirp`, case 20: a "dead zone" of 0.42 at an actuator offset of
+  // 1.74, the whole command range on one side of it).
+  const bool after_input_map = dead && slot >= 1 && IsInputMap(dead->fit.effects[slot - 1].kind);
+  if (!dead || dead->fit.effects[slot].params.empty()) return;
+  if (!after_input_map && (!limit || !limit->fit.significant)) return;
   const double d = dead->fit.effects[slot].params[0], du = dead->fit.input_offset;
   long below = 0, above = 0, total = 0;
   double beyond_below = 0, beyond_above = 0, u_min = INFINITY, u_max = -INFINITY;
@@ -177,16 +190,23 @@ void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& wor
   const bool shows_above = above >= 0.01 * total && beyond_above >= reach;
   const bool one_sided = shows_below != shows_above;
   const bool flat_holds_zero = std::abs(du) <= d;  // u = 0 inside u + du ∈ [−d, d]
-  if (!one_sided || flat_holds_zero ||
-      !(limit->fit.validation_mse <= dead->fit.validation_mse * SampleVarianceTolerance(ctx.n_val)))
-    return;
+  if (!one_sided || flat_holds_zero) return;
   char line[300];
-  std::snprintf(line, sizeof line,
-                "one-sided over the records: only the kink at u = %.4g is reached, the flat part "
-                "[%.4g, %.4g] lies away from zero command; the same map as an input limit, which "
-                "input_saturation fits as well (validation MSE %.4g against %.4g)",
-                below < above ? d - du : -d - du, -d - du, d - du, limit->fit.validation_mse,
-                dead->fit.validation_mse);
+  if (after_input_map) {
+    std::snprintf(line, sizeof line,
+                  "one-sided over the records: only the kink at u = %.4g is reached, the flat part "
+                  "[%.4g, %.4g] lies away from zero command; after %s that is a limit on its "
+                  "output, not a dead zone",
+                  below < above ? d - du : -d - du, -d - du, d - du, EffectName(dead->fit.effects[slot - 1].kind));
+  } else {
+    if (!(limit->fit.validation_mse <= dead->fit.validation_mse * SampleVarianceTolerance(ctx.n_val))) return;
+    std::snprintf(line, sizeof line,
+                  "one-sided over the records: only the kink at u = %.4g is reached, the flat part "
+                  "[%.4g, %.4g] lies away from zero command; the same map as an input limit, which "
+                  "input_saturation fits as well (validation MSE %.4g against %.4g)",
+                  below < above ? d - du : -d - du, -d - du, d - du, limit->fit.validation_mse,
+                  dead->fit.validation_mse);
+  }
   dead->masked = true;
   dead->fit.note = line;
 }
