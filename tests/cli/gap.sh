@@ -118,6 +118,13 @@ done
 jq -e '(.effects | length) == 2 and .input_offset != 0 and .output_offset != 0' "$dir/pairs/case1-truth.json" \
   > /dev/null || fail "case 1 is not a pair with offsets"
 expect "must be in [0, 1]" "$idrig" gap bench --cases 1 --combos 1.5
+# --pairs any: the 54 pairs in turn (case 0: time_delay with actuator_lag); an unknown set is refused.
+"$idrig" gap bench --cases 1 --seed 3 --samples 600 --combos 1 --pairs any --dump "$dir/anypairs" --json \
+  > "$dir/anypairs.json" 2>/dev/null || fail "gap bench --pairs any exited with $?"
+jq -e '.pairs == "any" and .combo_cases == 1' "$dir/anypairs.json" > /dev/null || fail "bench JSON lacks pairs"
+jq -e '[.effects[].effect] == ["time_delay", "actuator_lag"]' "$dir/anypairs/case0-truth.json" > /dev/null \
+  || fail "--pairs any case 0 is not time_delay with actuator_lag"
+expect "not in {rig,any}" "$idrig" gap bench --cases 1 --pairs some
 echo "ok: bench with offsets and pairs"
 
 # The bench's other excitations, integrating plants and sample time (the blind set has its own).

@@ -114,6 +114,19 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
       // the three with the lowest cost at the start are fitted.
       const auto grid = GridStarts(k2, ctx.scales);
       starts.insert(starts.end(), grid.begin(), grid.end());
+      // A clip alone has its limits in the measured output's coordinates (the output offset
+      // inside it, Predict); beside a sensor map the offset is after both and the limits are in
+      // the plant's: the first's limits, or the second's starts from the measured quantiles,
+      // move by the first's output offset (`--pairs any --seed 950`, case 51: the clip's measured
+      // limits read as the plant's, the pair fitted far worse than the clip alone).
+      const double b = first.fit.output_offsets.empty() ? 0.0 : first.fit.output_offsets.front();
+      if (k1 == EffectKind::kOutputSaturation && k2 == EffectKind::kSensorNonlinearity) {
+        const Candidate probe(*ctx.g0, spec, ctx.scales, 1);
+        prefix.segment(probe.BlockStart(0), 2).array() -= b / ctx.scales.y_max;  // φ = limit / y_max
+      }
+      if (k1 == EffectKind::kSensorNonlinearity && k2 == EffectKind::kOutputSaturation)
+        for (auto& start : starts)
+          for (double& limit : start) limit -= b;
       // From the first's fit, and from G0 as given with the first effect's parameters: the
       // first's plant has bent to mimic what the second effect does (a delay beside friction,
       // taken by the plant's poles), a basin the pair fit does not leave.

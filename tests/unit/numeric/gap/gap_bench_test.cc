@@ -180,6 +180,30 @@ TEST(GapBenchTest, TwoEffectsActInStageOrder) {
   for (long k = 0; k < u.size(); ++k) EXPECT_NEAR(y(k), SensorMap(delayed(k), sensor.params), 1e-6);
 }
 
+TEST(GapBenchTest, AnyPairIsEveryPairOfElevenEffectsButTheTwoFeedbackTerms) {
+  // 11 effects (none and parameter_mismatch aside): C(11, 2) = 55 pairs, less friction with a
+  // cubic spring (one feedback effect per simulation).
+  const auto& pairs = AnyEffectPairs();
+  EXPECT_EQ(pairs.size(), 54u);
+  std::set<std::pair<EffectKind, EffectKind>> seen;
+  for (const auto& [a, b] : pairs) {
+    EXPECT_NE(a, b);
+    for (EffectKind k : {a, b}) {
+      EXPECT_NE(k, EffectKind::kNone);
+      EXPECT_NE(k, EffectKind::kParameterMismatch);
+    }
+    EXPECT_FALSE(IsFeedbackEffect(a) && IsFeedbackEffect(b));
+    EXPECT_TRUE(seen.insert({std::min(a, b), std::max(a, b)}).second) << EffectName(a) << "+" << EffectName(b);
+  }
+  // The plan walks them in turn.
+  for (int i = 0; i < 60; ++i) {
+    const auto t = BenchCaseTruth(i, 1.0, true);
+    ASSERT_EQ(t.size(), 2u);
+    EXPECT_EQ(t[0], pairs[i % pairs.size()].first);
+    EXPECT_EQ(t[1], pairs[i % pairs.size()].second);
+  }
+}
+
 TEST(GapBenchTest, ThePlanHasTheRequestedShareOfPairsSpreadEvenly) {
   const auto& kinds = AllEffects();
   for (int i = 0; i < 30; ++i) {

@@ -619,6 +619,38 @@ TEST(GapPairTest, AModeWithinTwoStandardErrorsOfNoPeakIsNotAResonance) {
   EXPECT_LT(v.nrmse_after, 1.05 * v.noise_nrmse);
 }
 
+TEST(GapPairTest, AClipBesideASensorMapMovesItsLimitsIntoThePlantsCoordinates) {
+  // Case 51: an output clip and a mild cubic sensor map. A clip alone has its limits in the
+  // measured coordinates (the output offset inside it); beside a sensor map the offset is after
+  // both. The clip's measured limits were read as the plant's and the pair fitted far worse than
+  // the clip alone (LR −10453): only the clip was named, at 1.1 times the floor.
+  const GapCase c = AnyPairCase(51);
+  ASSERT_EQ(c.effects.size(), 2u);
+  ASSERT_EQ(c.effects[0].kind, EffectKind::kOutputSaturation);
+  ASSERT_EQ(c.effects[1].kind, EffectKind::kSensorNonlinearity);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const GapVerdict& v = report.verdict;
+  std::printf("clip + sensor map: verdict %s (%zu effects), NRMSE %.4f floor %.4f\n", v.effect.c_str(),
+              v.effects.size(), v.nrmse_after, v.noise_nrmse);
+  EXPECT_EQ(NamedSorted(v), (std::vector<std::string>{"output_saturation", "sensor_nonlinearity"}));
+  EXPECT_LT(v.nrmse_after, 1.05 * v.noise_nrmse);
+}
+
+TEST(GapPairTest, AOneSidedDeadZoneAfterBacklashIsNotNamed) {
+  // `idrig gap bench --cases 26 --seed 43 --offsets --excitation chirp`, case 20: backlash alone.
+  // Once two input-side maps could pair, a "dead zone" of 0.42 after the backlash, at an
+  // actuator offset of 1.74 (the whole command range on one side of it), made up for the
+  // backlash's poorer single fit and was named beside it. Only one of its kinks is reached: after
+  // another input map that is a limit on its output, not a dead zone.
+  const GapCase c = OffsetBenchCase(43, 20, {EffectKind::kBacklash}, false, "chirp");
+  const GapReport report = DiagnoseOnOneThread(c);
+  const GapVerdict& v = report.verdict;
+  std::printf("backlash under a chirp: verdict %s (%zu effects), NRMSE %.4f floor %.4f\n", v.effect.c_str(),
+              v.effects.size(), v.nrmse_after, v.noise_nrmse);
+  EXPECT_EQ(NamedSorted(v), (std::vector<std::string>{"backlash"}));
+  EXPECT_LT(v.nrmse_after, 1.05 * v.noise_nrmse);
+}
+
 TEST(GapOffsetTest, ALimitTheValidationRecordsShowIsNotReleased) {
   // `idrig gap bench --cases 26 --seed 204 --offsets --plants zeros --combos 1`, case 18: an
   // actuator lag and an input saturation on a plant with a zero. 0.8 % of the estimation
