@@ -273,7 +273,8 @@ std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const
 // Masks a dead zone that is an input limit in disguise (ranking.cc), before RankCandidates;
 // `slot`: where the two stand among the candidates' effects (1 for the second of a pair).
 void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& work, size_t slot = 0);
-// Masks a resonance fitted with ζ at its bound 1/√2 (no peak: a lag in disguise), ranking.cc.
+// Masks a resonance fitted with ζ at its bound 1/√2 or within two standard errors of it (no
+// peak: a lag in disguise), ranking.cc.
 void MaskPeaklessResonance(std::vector<CandidateWork>& work, size_t slot = 0);
 
 // effect_pairs.cc: forward selection of a second effect after `first` (an eligible single
