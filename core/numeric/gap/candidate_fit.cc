@@ -663,13 +663,20 @@ static Eigen::VectorXd StartPoint(const Candidate& cand, const Eigen::VectorXd& 
   return x0;
 }
 
+// Every prefix times every start of the last block, as full starting points.
+static std::vector<Eigen::VectorXd> StartPoints(const Candidate& cand, const std::vector<Eigen::VectorXd>& prefixes,
+                                                const std::vector<std::vector<double>>& starts) {
+  std::vector<Eigen::VectorXd> points;
+  for (const Eigen::VectorXd& prefix : prefixes)
+    for (const auto& start : starts) points.push_back(StartPoint(cand, prefix, start));
+  return points;
+}
+
 std::vector<Eigen::VectorXd> BestStartPoints(const FitContext& ctx, const CandidateSpec& spec,
                                              const std::vector<Eigen::VectorXd>& prefixes,
                                              const std::vector<std::vector<double>>& starts, size_t keep) {
   const Candidate cand(*ctx.g0, spec, ctx.scales, ctx.options->substeps);
-  std::vector<Eigen::VectorXd> points;
-  for (const Eigen::VectorXd& prefix : prefixes)
-    for (const auto& start : starts) points.push_back(StartPoint(cand, prefix, start));
+  const std::vector<Eigen::VectorXd> points = StartPoints(cand, prefixes, starts);
   if (points.size() <= keep) return points;
   const Residuals residuals{&cand, ctx.estimation, ctx.n_est};
   std::vector<std::pair<double, size_t>> scored;
@@ -708,10 +715,7 @@ void FitSpec(const FitContext& ctx, const CandidateSpec& spec,
              const std::vector<Eigen::VectorXd>& prefixes,
              const std::vector<std::vector<double>>& starts, CandidateWork& w) {
   const Candidate cand(*ctx.g0, spec, ctx.scales, ctx.options->substeps);
-  std::vector<Eigen::VectorXd> points;
-  for (const Eigen::VectorXd& prefix : prefixes)
-    for (const auto& start : starts) points.push_back(StartPoint(cand, prefix, start));
-  FitSpecFrom(ctx, spec, points, w);
+  FitSpecFrom(ctx, spec, StartPoints(cand, prefixes, starts), w);
 }
 
 void FitSpecFrom(const FitContext& ctx, const CandidateSpec& spec, const std::vector<Eigen::VectorXd>& points,
