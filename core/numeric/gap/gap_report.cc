@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <thread>
@@ -315,15 +316,30 @@ std::vector<GapRecord> BridgeGlitches(const std::vector<GapRecord>& records, con
   return out;
 }
 
+constexpr double kLatticeLevels = 1.5;  // a jump below 1.5 lattice steps is one level crossed
+
 // Marks every record's sensor steps (core/numeric/signal/level_shifts.h) against a model's
 // output: each step adds an output level of its own from there on (GapRecord::sensor_steps, a
 // nuisance column of every candidate); the simulation runs through it, so a plant's state (a
 // friction's stick position, a backlash's side) carries over. A step nearer than `min_part`
 // samples to the record's start or end, or to another step, is not marked (said in the notes).
+// On an output that sits on a lattice (a quantiser coarser than the noise), a jump of about one
+// lattice step is the reading crossing a level as the output moves through it — sharp and
+// lasting on a slow output, as a sensor step is — and is not marked either (`--pairs any
+// --integrating --seed 972`: four coarse quantisers, each read as two to four sensor steps).
 std::vector<GapRecord> MarkSensorSteps(const std::vector<GapRecord>& records, const char* set,
                                        const std::function<Eigen::VectorXd(const GapRecord&)>& model,
                                        const std::string& model_name, long min_part, GapReport& report) {
   std::vector<GapRecord> out = records;
+  std::optional<OutputLattice> lattice;  // of all the records, once a step is found
+  const auto lattice_step = [&]() {
+    if (!lattice) {
+      double strength = 0;
+      const double q = QuantisationStep(records, &strength);
+      lattice = DetectOutputLattice(records, q, 0.0);
+    }
+    return lattice->lattice ? lattice->step : 0.0;
+  };
   for (size_t i = 0; i < out.size(); ++i) {
     GapRecord& r = out[i];
     const long n = r.y.size();
@@ -345,7 +361,11 @@ std::vector<GapRecord> MarkSensorSteps(const std::vector<GapRecord>& records, co
       const bool near = step.sample - last < min_part || n - step.sample < min_part ||
                         std::any_of(r.sensor_steps.begin(), r.sensor_steps.end(),
                                     [&](long s) { return std::abs(s - step.sample) < min_part; });
-      if (near) {
+      const double q = lattice_step();
+      if (q > 0 && std::abs(step.size) < kLatticeLevels * q) {
+        msg << "; the output sits on a lattice of step " << q
+            << ": one level crossed as the output moves through it, not marked";
+      } else if (near) {
         msg << "; too near the record's ends or another step (" << min_part << " samples): not marked";
       } else {
         msg << ": a sensor level of its own from there on (a nuisance parameter of every candidate)";
@@ -715,7 +735,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
       if (searched > 0 && (!floor_known || searched == 3 ||
                            (best.kept && within_floor(best.pair.fit.validation_mse))))
         break;
-      PairSearch trial = SearchSecondEffect(ctx, w, top.bic, kinds);
+      PairSearch trial = SearchSecondEffect(ctx, w, top.bic, kinds, work);
       report.notes.push_back(trial.note);
       ++searched;
       searched_kinds.push_back(w.fit.effects.front().kind);
@@ -731,7 +751,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
       if (std::find(searched_kinds.begin(), searched_kinds.end(), other) == searched_kinds.end())
         for (const CandidateWork& w : work) {
           if (!w.fit.eligible || w.fit.effects.empty() || w.fit.effects.front().kind != other) continue;
-          PairSearch trial = SearchSecondEffect(ctx, w, top.bic, kinds);
+          PairSearch trial = SearchSecondEffect(ctx, w, top.bic, kinds, work);
           report.notes.push_back(trial.note + " (the best pair's other effect as the first)");
           ++searched;
           if (trial.kept && trial.pair.fit.bic < best.pair.fit.bic) best = std::move(trial);

@@ -39,6 +39,29 @@ TEST(GapLatticeTest, FindsTheStepAndOffsetOfAnAdcEvenWithNoiseAsLargeAsTheStep) 
   }
 }
 
+TEST(GapLatticeTest, OnAnOutputHeldAtAFewLevelsTheStepIsNotAQLinedUpWithHalfOfThem) {
+  // Eight levels held for the sample counts of `idrig gap bench --cases 54 --seed 972 --offsets
+  // --combos 1 --pairs any --integrating --excitation levels`, case 50 (a slow position through
+  // a quantiser of step 0.806): a q a fifth larger lines up about half of the samples (R ≈ 0.53),
+  // which the rule "the largest local maximum within half of the best" took as the step.
+  const double q = 0.806, offset = 0.317;
+  const int counts[8] = {289, 1438, 755, 159, 302, 272, 375, 410};
+  GapRecord r;
+  long n = 0;
+  for (int c : counts) n += c;
+  r.y.resize(n);
+  r.u = Eigen::VectorXd::Zero(n);
+  r.sample_time = 0.01;
+  long k = 0;
+  for (int level = 0; level < 8; ++level)
+    for (int i = 0; i < counts[level]; ++i) r.y(k++) = offset + level * q;
+  double strength = 0;
+  const double step = gap_detail::QuantisationStep({r}, &strength);
+  EXPECT_NEAR(step, q, 1e-3 * q);
+  EXPECT_GT(strength, 0.99);
+  EXPECT_TRUE(DetectOutputLattice({r}, step, 0.05).lattice);
+}
+
 TEST(GapLatticeTest, ContinuousDataPrintedWithFewDigitsIsNotQuantisation) {
   std::mt19937_64 rng(4);
   GapCaseOptions options;
