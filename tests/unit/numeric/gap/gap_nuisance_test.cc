@@ -681,6 +681,21 @@ TEST(GapPairTest, APairAlsoStartsFromTheSecondEffectsOwnFit) {
   }
 }
 
+TEST(GapPairTest, TwoTiedSinglesAboveTheFloorAreSettledByTheirPair) {
+  // `--seed 970 --excitation multisine`, case 41: backlash (r 0.106) with a cubic spring. Each
+  // alone explains the same part of the gap (their validation BICs 0.07 apart, five times the
+  // floor): `ambiguous`, and no pair was searched from a tie.
+  const GapCase c = AnyPairCase(41, {EffectKind::kBacklash, EffectKind::kCubicStiffness}, 970, "multisine");
+  const GapReport report = DiagnoseAndPrint(c, "backlash + cubic spring");
+  const GapVerdict& v = report.verdict;
+  ExpectNamedAtTheFloor(v, {"backlash", "cubic_stiffness"});
+  EXPECT_TRUE(v.tied.empty());
+  for (const Effect& e : v.effects) {
+    if (e.kind == EffectKind::kBacklash) EXPECT_NEAR(e.params[0], c.effects[0].params[0], 0.03 * c.effects[0].params[0]);
+    if (e.kind == EffectKind::kCubicStiffness) EXPECT_NEAR(e.params[0], c.effects[1].params[0], 0.05 * c.effects[1].params[0]);
+  }
+}
+
 TEST(GapIntegratingTest, AQuantiserCrossingALevelIsNotASensorStep) {
   // `--seed 972 --integrating`, case 53: a quantiser of step 0.79 (noise 0.07) after a mild
   // sensor map, on a position that moves slowly. Each crossing of a level is a sharp jump that
