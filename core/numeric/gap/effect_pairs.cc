@@ -193,7 +193,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
     }
   }
   MaskOneSidedDeadZone(ctx, pairs, 1);  // a one-sided second limit is a limit (ranking.cc)
-  MaskPeaklessResonance(pairs, 1);       // a second mode without a peak is a lag (ranking.cc)
+  MaskImplausibleDynamics(ctx.scales, pairs);  // a mode without a peak, a lag over the record (ranking.cc)
   std::vector<const CandidateWork*> passing;
   for (CandidateWork& w : pairs) {
     CandidateFit& c = w.fit;

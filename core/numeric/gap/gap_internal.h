@@ -273,9 +273,11 @@ std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const
 // Masks a dead zone that is an input limit in disguise (ranking.cc), before RankCandidates;
 // `slot`: where the two stand among the candidates' effects (1 for the second of a pair).
 void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& work, size_t slot = 0);
-// Masks a resonance fitted with ζ at its bound 1/√2 or within two standard errors of it (no
-// peak: a lag in disguise), ranking.cc.
-void MaskPeaklessResonance(std::vector<CandidateWork>& work, size_t slot = 0);
+// Masks a candidate (single or pair) with a resonance fitted with ζ at its bound 1/√2 or within
+// two standard errors of it (no peak: a lag in disguise) or above the Nyquist frequency π/ts (no
+// sampled record shows it), or with an actuator lag longer than the longest record (an
+// integrator over the record, not a lag); ranking.cc.
+void MaskImplausibleDynamics(const Scales& scales, std::vector<CandidateWork>& work);
 
 // effect_pairs.cc: forward selection of a second effect after `first` (an eligible single
 // effect), each other effect added to it and refitted together; a pair is kept when it passes

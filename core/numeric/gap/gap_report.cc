@@ -581,7 +581,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
   ParallelFor(kinds.size(), options.threads, [&](size_t i) { work[i] = fit_one(kinds[i]); },
               [&](size_t i) { return std::string("fitting ") + EffectName(kinds[i]); });
   MaskOneSidedDeadZone(ctx, work);
-  MaskPeaklessResonance(work);
+  MaskImplausibleDynamics(ctx.scales, work);
 
   // Noise floor, estimated without the candidates (gap_noise.h); records too short for it fall
   // back to the smallest estimation residual among the candidates (said in the method).

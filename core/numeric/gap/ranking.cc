@@ -123,22 +123,38 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
 // with a lag, a mode of ζ 0.702 ± 0.005 named with the lag). A missing mode of that kind is
 // missing dynamics, for the linear order check to name; the candidate is masked (not eligible,
 // with a note).
-void MaskPeaklessResonance(std::vector<CandidateWork>& work, size_t slot) {
+void MaskImplausibleDynamics(const Scales& scales, std::vector<CandidateWork>& work) {
   for (auto& w : work) {
-    if (w.fit.effects.size() != slot + 1) continue;
-    const Effect& e = w.fit.effects[slot];
-    if (e.kind != EffectKind::kUnmodelledResonance || e.params.size() < 2) continue;
-    // At the bound, or within two standard errors of it: the data show no peak.
-    const double sd = w.fit.effects_std.size() > slot && w.fit.effects_std[slot].size() > 1
-                          ? w.fit.effects_std[slot][1] : NAN;
-    if (!(e.params[1] >= M_SQRT1_2 * (1 - 1e-9)) && !(e.params[1] + 2 * sd >= M_SQRT1_2)) continue;
-    w.masked = true;
-    char line[320];
-    std::snprintf(line, sizeof line,
-                  "set aside: the mode at %.4g rad/s fitted ζ = %.4g, at its bound 1/√2 or within two "
-                  "standard errors of it: no resonant peak (a low-pass standing in for a lag or a delay)",
-                  e.params[0], e.params[1]);
-    w.fit.note = line;
+    for (size_t slot = 0; slot < w.fit.effects.size() && !w.masked; ++slot) {
+      const Effect& e = w.fit.effects[slot];
+      char line[320];
+      // `--pairs any --excitation steps --seed 974` case 42: a mode at 4928 rad/s (Nyquist 314)
+      // came first in a pair with backlash; `--integrating --seed 972` case 53: a lag of 3.4·10⁸ s.
+      if (e.kind == EffectKind::kUnmodelledResonance && !e.params.empty() && e.params[0] > M_PI / scales.ts) {
+        w.masked = true;
+        std::snprintf(line, sizeof line,
+                      "set aside: the mode at %.4g rad/s is above the Nyquist frequency %.4g rad/s; no sampled "
+                      "record can show it", e.params[0], M_PI / scales.ts);
+        w.fit.note = line;
+      } else if (e.kind == EffectKind::kActuatorLag && !e.params.empty() && e.params[0] > scales.duration) {
+        w.masked = true;
+        std::snprintf(line, sizeof line,
+                      "set aside: a lag of %.4g s, longer than the longest record (%.4g s), is an integrator "
+                      "over the record, not an actuator lag", e.params[0], scales.duration);
+        w.fit.note = line;
+      } else if (e.kind == EffectKind::kUnmodelledResonance && e.params.size() >= 2) {
+        // At the bound, or within two standard errors of it: the data show no peak.
+        const double sd = w.fit.effects_std.size() > slot && w.fit.effects_std[slot].size() > 1
+                              ? w.fit.effects_std[slot][1] : NAN;
+        if (!(e.params[1] >= M_SQRT1_2 * (1 - 1e-9)) && !(e.params[1] + 2 * sd >= M_SQRT1_2)) continue;
+        w.masked = true;
+        std::snprintf(line, sizeof line,
+                      "set aside: the mode at %.4g rad/s fitted ζ = %.4g, at its bound 1/√2 or within two "
+                      "standard errors of it: no resonant peak (a low-pass standing in for a lag or a delay)",
+                      e.params[0], e.params[1]);
+        w.fit.note = line;
+      }
+    }
   }
 }
 

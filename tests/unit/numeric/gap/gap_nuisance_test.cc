@@ -691,8 +691,12 @@ TEST(GapPairTest, TwoTiedSinglesAboveTheFloorAreSettledByTheirPair) {
   ExpectNamedAtTheFloor(v, {"backlash", "cubic_stiffness"});
   EXPECT_TRUE(v.tied.empty());
   for (const Effect& e : v.effects) {
-    if (e.kind == EffectKind::kBacklash) EXPECT_NEAR(e.params[0], c.effects[0].params[0], 0.03 * c.effects[0].params[0]);
-    if (e.kind == EffectKind::kCubicStiffness) EXPECT_NEAR(e.params[0], c.effects[1].params[0], 0.05 * c.effects[1].params[0]);
+    if (e.kind == EffectKind::kBacklash) {
+      EXPECT_NEAR(e.params[0], c.effects[0].params[0], 0.03 * c.effects[0].params[0]);
+    }
+    if (e.kind == EffectKind::kCubicStiffness) {
+      EXPECT_NEAR(e.params[0], c.effects[1].params[0], 0.05 * c.effects[1].params[0]);
+    }
   }
 }
 

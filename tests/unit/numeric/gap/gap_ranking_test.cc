@@ -65,5 +65,35 @@ TEST(GapValidationBicTest, ADivergedSimulationRanksLastInsteadOfBreakingTheOrder
   EXPECT_LT(finite, ValidationBic(100, 200, std::nan(""), 1, 0));
 }
 
+// Dynamics no record can show are set aside (not eligible, with a note), first or second in a
+// pair: a mode above the Nyquist frequency π/ts, an actuator lag longer than the longest record.
+// References: ts and the record's duration; a mode below Nyquist with a peak and a lag within
+// the record stay.
+TEST(GapMaskTest, DynamicsNoRecordCanShowAreSetAside) {
+  Scales scales;
+  scales.ts = 0.01;        // Nyquist 314 rad/s
+  scales.duration = 40.0;  // 4000 samples
+  auto candidate = [](std::vector<Effect> effects) {
+    CandidateWork w;
+    w.fit.effects = std::move(effects);
+    w.fit.effects_std.assign(w.fit.effects.size(), std::vector<double>(2, 0.001));
+    return w;
+  };
+  const Effect backlash{EffectKind::kBacklash, {0.3}};
+  std::vector<CandidateWork> work = {
+      candidate({{EffectKind::kUnmodelledResonance, {4928.0, 0.43}}, backlash}),  // above Nyquist, first
+      candidate({backlash, {EffectKind::kUnmodelledResonance, {320.0, 0.3}}}),   // above Nyquist, second
+      candidate({{EffectKind::kActuatorLag, {3.4e8}}}),                           // longer than the record
+      candidate({{EffectKind::kUnmodelledResonance, {300.0, 0.3}}}),              // below Nyquist, a peak
+      candidate({{EffectKind::kActuatorLag, {39.0}}, backlash}),                  // within the record
+  };
+  MaskImplausibleDynamics(scales, work);
+  const bool expected[] = {true, true, true, false, false};
+  for (size_t i = 0; i < work.size(); ++i) {
+    EXPECT_EQ(work[i].masked, expected[i]) << "candidate " << i << ": " << work[i].fit.note;
+    EXPECT_EQ(work[i].fit.note.empty(), !expected[i]) << "candidate " << i;
+  }
+}
+
 }  // namespace
 }  // namespace idrig::gap_detail
