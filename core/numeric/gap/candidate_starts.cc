@@ -88,11 +88,11 @@ std::vector<std::vector<double>> GridStarts(EffectKind kind, const Scales& s) {
 // Candidate quantisation steps: the mean resultant length R(q) = |mean exp(2πi y/q)| is near 1
 // when the samples sit on multiples of q (and on multiples of q/2, q/3, …), near 1/√N when not.
 // With noise σ before the rounding R(q) = exp(−2π²σ²/q²) and R(q/k) = R(q)^(k²): the step has the
-// largest R, and a submultiple ties with it only when the noise is far below the step. The step
-// is the best q, or a multiple of it whose R is within 10 % of the best (q, not q/2). A q that
-// is no multiple of the best is not taken however high its R: on an output held at a few levels
-// a q a fifth off the step lines up half of the samples (R 0.53 against 1.00, `--pairs any
-// --integrating --seed 972` case 50, which made the lattice fail its 95 % test).
+// largest R, and a submultiple ties with it only when the noise is far below the step. On a
+// lattice the step is the best q, or a multiple of it whose R is within 10 % of the best (q, not
+// q/2). A q that is no multiple of the best is not taken however high its R: on an output held
+// at a few levels a q a fifth off the step lines up half of the samples (R 0.53 against 1.00,
+// `--pairs any --integrating --seed 972` case 50, which made the lattice fail its 95 % test).
 double QuantisationStep(const std::vector<GapRecord>& records, double* strength) {
   std::vector<double> y;
   for (const auto& r : records)
@@ -116,13 +116,19 @@ double QuantisationStep(const std::vector<GapRecord>& records, double* strength)
   for (size_t i = 0; i < table.size(); ++i)
     if (table[i].second > table[at].second) at = i;
   const double best = table[at].second;
-  // The largest-q local maximum within 10 % of the best at a whole multiple of the best's q (2 %
-  // apart, the grid's spacing over a multiple of up to 5): q itself, not q/2, q/3, ….
-  double step = table[at].first;
-  for (size_t i = at + 1; i + 1 < table.size(); ++i) {
+  // On a lattice (the best R at least kStrongLattice): the largest-q local maximum within 10 % of
+  // the best at a whole multiple of the best's q (2 % apart, the grid's spacing over a multiple
+  // of up to 5): q itself, not q/2, q/3, …. Where R is about the noise's 1/√N everywhere (no
+  // lattice, or noise far above the step) the largest-q local maximum within half of the best: a
+  // coarse staircase that fits nothing, as before.
+  constexpr double kStrongLattice = 0.3;
+  double step = best >= kStrongLattice ? table[at].first : table.front().first;
+  for (size_t i = (best >= kStrongLattice ? at : 0) + 1; i + 1 < table.size(); ++i) {
     const double multiple = table[i].first / table[at].first;
-    if (table[i].second >= 0.9 * best && table[i].second >= table[i - 1].second &&
-        table[i].second >= table[i + 1].second && std::abs(multiple - std::round(multiple)) < 0.02 * multiple)
+    const bool local_max = table[i].second >= table[i - 1].second && table[i].second >= table[i + 1].second;
+    if (best >= kStrongLattice ? local_max && table[i].second >= 0.9 * best &&
+                                     std::abs(multiple - std::round(multiple)) < 0.02 * multiple
+                               : local_max && table[i].second >= 0.5 * best)
       step = table[i].first;
   }
   double refined = step, refined_r = resultant(step);

@@ -715,7 +715,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
   // independent noise floor, the search goes on from the next eligible effect (up to three
   // firsts); the pair with the lowest validation BIC is kept.
   // Two single effects tied (within ambiguity_bic) while the validation records stay above the
-  // floor: each explains part of what two effects do together, and the pair, if one passes its
+  // floor: each explains part of what two effects do together, and their pair, if it passes its
   // rules against both, settles the tie (`--pairs any --excitation multisine --seed 970` case 41:
   // backlash with a cubic spring, the two singles 0.07 BIC apart at five times the floor).
   const bool tie = v.effect == "ambiguous" && v.tied.size() == 2;
@@ -766,7 +766,19 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
     CandidateWork single;
     std::string prune_note;
     bool main_second = false;
-    if (best.kept && tie && PruneToSingle(ctx, best.pair, single, prune_note, &main_second)) {
+    // A tie is settled only by the pair of the two tied effects: a pair that holds one of them
+    // leaves the other's pair untried (`--seed 951` case 16: a lag and a resonance tied beside a
+    // clip; the resonance's pair is no answer to which of the two it is).
+    const auto holds_both = [&](const CandidateFit& c) {
+      return c.effects.size() == 2 &&
+             ((EffectName(c.effects[0].kind) == v.tied[0] && EffectName(c.effects[1].kind) == v.tied[1]) ||
+              (EffectName(c.effects[0].kind) == v.tied[1] && EffectName(c.effects[1].kind) == v.tied[0]));
+    };
+    if (best.kept && tie && !holds_both(best.pair.fit)) {
+      report.notes.push_back("the tie between " + v.tied[0] + " and " + v.tied[1] + " stands: the best pair, " +
+                             EffectName(best.pair.fit.effects[0].kind) + " with " +
+                             EffectName(best.pair.fit.effects[1].kind) + ", does not hold both");
+    } else if (best.kept && tie && PruneToSingle(ctx, best.pair, single, prune_note, &main_second)) {
       report.notes.push_back(prune_note + "; the tie between " + v.tied[0] + " and " + v.tied[1] + " stands");
     } else if (best.kept && PruneToSingle(ctx, best.pair, single, prune_note, &main_second)) {
       report.notes.push_back(prune_note);
