@@ -56,7 +56,7 @@ SecondEffectTest TestSecondEffect(const FitContext& ctx, const CandidateWork& on
 }  // namespace
 
 PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
-                              const std::vector<EffectKind>& kinds, const std::vector<CandidateWork>& singles) {
+                              const std::vector<EffectKind>& kinds) {
   PairSearch out;
   const EffectKind k1 = first.spec.kinds.front();
   // Under a two-valued input (PRBS, random binary) an input saturation, dead zone or backlash
@@ -131,20 +131,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
       // taken by the plant's poles), a basin the pair fit does not leave.
       Eigen::VectorXd from_g0 = prefix;
       from_g0.head(base.PlantParams()).setZero();
-      std::vector<Eigen::VectorXd> prefixes = {prefix, from_g0};
-      // And from the second effect's own fit: its plant with the first's parameters, its
-      // parameters among the starts (`--pairs any --excitation noise --seed 973` case 7: a delay
-      // of 0.12 s beside a clip, reached from neither and named a resonance of ζ 0.66).
-      for (const CandidateWork& s : singles)
-        if (fixed.empty() && s.spec.kinds.size() == 1 && s.spec.kinds.front() == k2 &&
-            s.x.size() >= base.PlantParams() && !s.fit.effects.empty() &&
-            !starts.empty() && s.fit.effects.front().params.size() == starts.front().size()) {
-          Eigen::VectorXd from_second = prefix;
-          from_second.head(base.PlantParams()) = s.x.head(base.PlantParams());
-          prefixes.push_back(from_second);
-          starts.insert(starts.begin(), s.fit.effects.front().params);
-        }
-      const auto points = BestStartPoints(pair_ctx, spec, prefixes, starts, 3);
+      const auto points = BestStartPoints(pair_ctx, spec, {prefix, from_g0}, starts, 3);
       CandidateWork trial;
       FitSpecFrom(pair_ctx, spec, points, trial);
       const double criterion = ctx.n_est * std::log(trial.fit.estimation_mse) +

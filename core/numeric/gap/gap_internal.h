@@ -313,10 +313,8 @@ std::vector<Eigen::VectorXd> BestStartPoints(const FitContext& ctx, const Candid
                                              const std::vector<Eigen::VectorXd>& prefixes,
                                              const std::vector<std::vector<double>>& starts, size_t keep);
 
-// `singles`: the single candidates' fits; the pair also starts from the second effect's own fit
-// (its plant, its parameters) with the first's parameters.
 PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first, double top_bic,
-                              const std::vector<EffectKind>& kinds, const std::vector<CandidateWork>& singles);
+                              const std::vector<EffectKind>& kinds);
 
 // linear_order.cc: a linear model of order n0 + 2 (passing the LR and signature tests against
 // the refit) against the best single candidate `top` (wins) and against the linear candidates of

@@ -740,7 +740,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
       if (searched > 0 && (!floor_known || searched == 3 ||
                            (best.kept && within_floor(best.pair.fit.validation_mse))))
         break;
-      PairSearch trial = SearchSecondEffect(ctx, w, top.bic, kinds, work);
+      PairSearch trial = SearchSecondEffect(ctx, w, top.bic, kinds);
       report.notes.push_back(trial.note);
       ++searched;
       searched_kinds.push_back(w.fit.effects.front().kind);
@@ -756,7 +756,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
       if (std::find(searched_kinds.begin(), searched_kinds.end(), other) == searched_kinds.end())
         for (const CandidateWork& w : work) {
           if (!w.fit.eligible || w.fit.effects.empty() || w.fit.effects.front().kind != other) continue;
-          PairSearch trial = SearchSecondEffect(ctx, w, top.bic, kinds, work);
+          PairSearch trial = SearchSecondEffect(ctx, w, top.bic, kinds);
           report.notes.push_back(trial.note + " (the best pair's other effect as the first)");
           ++searched;
           if (trial.kept && trial.pair.fit.bic < best.pair.fit.bic) best = std::move(trial);

@@ -129,7 +129,8 @@ void MaskImplausibleDynamics(const Scales& scales, std::vector<CandidateWork>& w
       const Effect& e = w.fit.effects[slot];
       char line[320];
       // `--pairs any --excitation steps --seed 974` case 42: a mode at 4928 rad/s (Nyquist 314)
-      // came first in a pair with backlash; `--integrating --seed 972` case 53: a lag of 3.4·10⁸ s.
+      // came first in a pair with backlash (with a start tried at stop 31 and reverted);
+      // `--integrating --seed 972` case 53: a lag of 3.4·10⁸ s beside a quantiser.
       if (e.kind == EffectKind::kUnmodelledResonance && !e.params.empty() && e.params[0] > M_PI / scales.ts) {
         w.masked = true;
         std::snprintf(line, sizeof line,

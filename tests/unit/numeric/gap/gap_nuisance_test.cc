@@ -667,18 +667,6 @@ TEST(GapPairTest, AResonanceBehindAnAbsoluteValueSensorIsTriedWhenADelayPassesIn
   ExpectParameterNear(v, EffectKind::kUnmodelledResonance, 1, c.effects[0].params[1], 0.05);
 }
 
-TEST(GapPairTest, APairAlsoStartsFromTheSecondEffectsOwnFit) {
-  // `--seed 973 --excitation noise`, case 7: a delay of 0.12 s with an output clip. From the
-  // clip's fit and from G0 the pair's delay stopped short (ΔBIC −10316) and a resonance of ζ 0.66
-  // took its place (−12044, 1.04 times the floor). The delay fitted alone sits near its value:
-  // its plant, with the clip's limits, is a third start.
-  const GapCase c = AnyPairCase(7, {EffectKind::kTimeDelay, EffectKind::kOutputSaturation}, 973, "noise");
-  const GapReport report = DiagnoseAndPrint(c, "delay + clip");
-  const GapVerdict& v = report.verdict;
-  ExpectNamedAtTheFloor(v, {"output_saturation", "time_delay"});
-  ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.02);
-}
-
 TEST(GapPairTest, TwoTiedSinglesAboveTheFloorAreSettledByTheirPair) {
   // `--seed 970 --excitation multisine`, case 41: backlash (r 0.106) with a cubic spring. Each
   // alone explains the same part of the gap (their validation BICs 0.07 apart, five times the
