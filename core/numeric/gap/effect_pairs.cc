@@ -167,7 +167,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   // after all (`--pairs any --excitation steps --seed 974` case 25: a resonance beside an |y|
   // sensor named a delay, the resonance not tried).
   std::string resonance_late;  // the dynamic effect that let the resonance in
-  if (!input_note.empty() && std::find(kinds.begin(), kinds.end(), EffectKind::kUnmodelledResonance) != kinds.end()) {
+  if (!input_note.empty()) {  // set only when the resonance was among the seconds and taken out
     const CandidateWork* dynamic = nullptr;
     for (const CandidateWork& w : pairs)
       if (w.fit.effects.size() == 2 && IsLinearEffect(w.fit.effects[1].kind) && w.fit.significant &&

@@ -774,13 +774,15 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
              ((EffectName(c.effects[0].kind) == v.tied[0] && EffectName(c.effects[1].kind) == v.tied[1]) ||
               (EffectName(c.effects[0].kind) == v.tied[1] && EffectName(c.effects[1].kind) == v.tied[0]));
     };
-    if (best.kept && tie && !holds_both(best.pair.fit)) {
+    const bool settles = !tie || (best.kept && holds_both(best.pair.fit));
+    const bool pruned = best.kept && settles && PruneToSingle(ctx, best.pair, single, prune_note, &main_second);
+    if (best.kept && !settles) {
       report.notes.push_back("the tie between " + v.tied[0] + " and " + v.tied[1] + " stands: the best pair, " +
                              EffectName(best.pair.fit.effects[0].kind) + " with " +
                              EffectName(best.pair.fit.effects[1].kind) + ", does not hold both");
-    } else if (best.kept && tie && PruneToSingle(ctx, best.pair, single, prune_note, &main_second)) {
+    } else if (pruned && tie) {
       report.notes.push_back(prune_note + "; the tie between " + v.tied[0] + " and " + v.tied[1] + " stands");
-    } else if (best.kept && PruneToSingle(ctx, best.pair, single, prune_note, &main_second)) {
+    } else if (pruned) {
       report.notes.push_back(prune_note);
       const CandidateFit& c = single.fit;
       verdict_val_mse = c.validation_mse;
