@@ -39,6 +39,47 @@ Eigen::MatrixXd FreeResponse(const TransferFunction& plant, double ts, long n) {
   return f;
 }
 
+// The input a delayed plant's line holds at the start of a record. The rig ran before the
+// record began, so over the first d samples (d = the whole-sample delay) the plant is driven by
+// what it was given then, not by zero: an unknown level c per record (the rig settled at an
+// operating point), entering the prediction linearly beside the initial state. Its column is
+// the plant's zero-state response to an input of 1 over the first d samples and 0 after (the
+// fractional part of the delay in the sampled plant, as in simulation); n rows at most, fewer
+// where it has decayed (the caller treats missing rows as zeros). Empty without a whole-sample
+// delay: the line is then empty and x0 alone is the state. `rounded`: the delay as the
+// simulator takes it beside a feedback effect (whole samples, rounded; no fractional part).
+Eigen::VectorXd PreRecordResponse(const TransferFunction& plant, double ts, long n, bool rounded) {
+  const double samples = plant.delay_s / ts;
+  if (n <= 0 || !((rounded ? std::round(samples) : std::floor(samples + 1e-12)) >= 1)) return Eigen::VectorXd();
+  TransferFunction g = plant;
+  if (rounded) g.delay_s = 0;
+  const StateSpace c = ToStateSpace(g), d = DiscretizeZoh(c, ts);
+  const long whole = rounded ? std::lround(samples) : std::lround(d.delay_s / ts);
+  if (whole <= 0 || n <= 0) return Eigen::VectorXd();
+  Eigen::VectorXd out(n), x = Eigen::VectorXd::Zero(d.A.rows());
+  x.tail(d.A.rows() - c.A.rows()).setOnes();  // a fractional delay's state: the previous input, c too
+  double largest = 0;
+  for (long k = 0; k < n; ++k) {
+    const double u = k < whole ? 1.0 : 0.0;
+    out(k) = (d.C.row(0) * x)(0, 0) + d.D(0, 0) * u;
+    largest = std::max(largest, std::abs(out(k)));
+    if (k >= whole && !(x.norm() > 1e-15 * std::max(largest, 1e-300))) return out.head(k + 1);
+    x = d.A * x + d.B.col(0) * u;
+    if (!x.allFinite()) return out.head(k + 1);
+  }
+  return out;
+}
+
+// The state columns of a record's first segment: the free response F, and beside it the input
+// held in the delay line before the record (PreRecordResponse) where there is one.
+Eigen::MatrixXd WithPreRecord(const Eigen::MatrixXd& free, const Eigen::VectorXd& pre) {
+  if (pre.size() == 0 || free.cols() == 0) return free;
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(std::max<long>(free.rows(), pre.size()), free.cols() + 1);
+  out.topLeftCorner(free.rows(), free.cols()) = free;
+  out.col(free.cols()).head(pre.size()) = pre;
+  return out;
+}
+
 // Least squares through small normal equations, equilibrated (unit diagonal) and solved by a
 // symmetric eigen-decomposition with a relative cut-off (a minimum-norm solution where the
 // columns are nearly dependent: the fitted values, all that matters here, are then still the
@@ -474,8 +515,12 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
   if (!y.allFinite()) return y;
   const auto segments = Segments(record, spec_.segment);
   const long longest = Longest(segments);
-  const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(LinearPart(x), record.sample_time, longest)
+  const TransferFunction linear = LinearPart(x);
+  const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(linear, record.sample_time, longest)
                                                 : Eigen::MatrixXd(longest, 0);
+  const bool feedback = std::any_of(spec_.kinds.begin(), spec_.kinds.end(), IsFeedbackEffect);
+  const Eigen::MatrixXd first =
+      WithPreRecord(free, spec_.free_state ? PreRecordResponse(linear, record.sample_time, longest, feedback) : Eigen::VectorXd());
   if (!maps.empty() && !segments.empty()) {  // the unscored warm-up: the maps alone
     Eigen::VectorXd head = y.head(segments.front().first);
     ApplyOutputMaps(maps, head, nullptr);
@@ -487,23 +532,26 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
       std::none_of(maps.begin(), maps.end(), [](const Effect& e) { return e.kind != EffectKind::kOutputSaturation; });
   for (size_t j = 0; j < segments.size(); ++j) {
     const auto [start, len] = segments[j];
+    // The delay line's level before the record on the segment that starts the record; a later
+    // segment (or a record scored from later on) has the record's own input in the line.
+    const Eigen::MatrixXd& state = start == 0 ? first : free;
     // The sensor's own columns beside the offset (after the output maps, where the sensor is): a
     // drift's ramp, the level each sensor step adds.
     const Eigen::MatrixXd sensor = SensorColumns(record, start, len, spec_.drift);
-    const long n = free.cols(), m = sensor.cols();
+    const long n = state.cols(), m = sensor.cols();
     Eigen::VectorXd coef;
     if (!maps.empty()) {  // the state inside the maps, the offset (and the sensor's columns) after them
       Eigen::VectorXd fitted;
-      coef = OffsetAndStateThroughMaps(record.y.segment(start, len), y.segment(start, len), free, maps, &fitted,
+      coef = OffsetAndStateThroughMaps(record.y.segment(start, len), y.segment(start, len), state, maps, &fitted,
                                        offset_inside, sensor);
       y.segment(start, len) = fitted;
     } else {
-      coef = OffsetAndStateFit(record.y.segment(start, len) - y.segment(start, len), free, nullptr,
+      coef = OffsetAndStateFit(record.y.segment(start, len) - y.segment(start, len), state, nullptr,
                                m > 0 ? &sensor : nullptr);
       if (coef.allFinite()) {
         y.segment(start, len).array() += coef(0);
-        const long rows = std::min<long>(len, free.rows());
-        if (n > 0) y.segment(start, rows) += free.topRows(rows) * coef.segment(1, n);
+        const long rows = std::min<long>(len, state.rows());
+        if (n > 0) y.segment(start, rows) += state.topRows(rows) * coef.segment(1, n);
         if (m > 0) y.segment(start, len) += sensor * coef.tail(m);
       }
     }
@@ -545,16 +593,20 @@ TransferFunction Candidate::LinearPart(const Eigen::VectorXd& x) const {
 
 long Candidate::NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapRecord>& records) const {
   const TransferFunction linear = LinearPart(x);
+  const bool feedback = std::any_of(spec_.kinds.begin(), spec_.kinds.end(), IsFeedbackEffect);
   long columns = 0;
   for (const GapRecord& record : records) {
     const auto segments = Segments(record, spec_.segment);
     const long longest = Longest(segments);
     const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(linear, record.sample_time, longest)
                                                   : Eigen::MatrixXd(longest, 0);
+    const Eigen::MatrixXd first =
+        WithPreRecord(free, spec_.free_state ? PreRecordResponse(linear, record.sample_time, longest, feedback) : Eigen::VectorXd());
     for (const auto& segment : segments) {
       long rank = 0;
       const Eigen::MatrixXd sensor = SensorColumns(record, segment.first, segment.second, spec_.drift);
-      OffsetAndStateFit(Eigen::VectorXd::Zero(segment.second), free, &rank, sensor.cols() > 0 ? &sensor : nullptr);
+      OffsetAndStateFit(Eigen::VectorXd::Zero(segment.second), segment.first == 0 ? first : free, &rank,
+                        sensor.cols() > 0 ? &sensor : nullptr);
       columns += rank;
     }
   }

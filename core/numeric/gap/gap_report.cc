@@ -494,6 +494,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
   v.nuisance.initial_state = ctx.nuisance.segment > 0
                                  ? "free per segment of " + std::to_string(ctx.nuisance.segment) + " samples (least squares)"
                                  : "free per record (least squares)";
+  v.nuisance.initial_state += "; a delayed model also holds a free input level in its delay line at the start of each record";
 
   // G0 as given (with the nuisance), and G0 refitted (parameter_mismatch): the references.
   const Candidate as_is(g0, [&] {

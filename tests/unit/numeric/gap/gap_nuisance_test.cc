@@ -278,7 +278,9 @@ TEST(GapIntegratingTest, ExtraStatesFittedOnValidationDoNotBuyAResonanceForADela
               v.effect.c_str(), delay.nuisance_validation, resonance.nuisance_validation, v.fit_scheme.c_str());
   ASSERT_EQ(v.fit_scheme, "multiple_shooting");
   const long segments = report.validation_samples / v.shooting_segment;
-  EXPECT_EQ(resonance.nuisance_validation - delay.nuisance_validation, 2 * segments);
+  // Two states more per segment; the delay has one column the resonance lacks, the level its
+  // line holds before the (one) validation record.
+  EXPECT_EQ(resonance.nuisance_validation - delay.nuisance_validation, 2 * segments - 1);
   const bool delay_named = v.effect == "time_delay" ||
                            std::find(v.tied.begin(), v.tied.end(), "time_delay") != v.tied.end();
   EXPECT_TRUE(delay_named) << v.effect;
@@ -581,6 +583,37 @@ void ExpectParameterNear(const GapVerdict& v, EffectKind kind, size_t index, dou
       EXPECT_NEAR(e.params[index], truth, share * std::abs(truth)) << EffectName(kind) << " parameter " << index;
     }
   }
+}
+
+TEST(GapOffsetTest, ARecordStartedMidRunHasTheInputBeforeItInTheDelayLine) {
+  // A rig that ran before the record began: settled at an input c (est 0.8, val −0.7 of the
+  // command's peak), then the record's own input. Over the first d samples a delayed plant is
+  // still driven by c. With the line taken as empty (8ae8bbb), the start transient bought a
+  // second effect and pulled the delay to 0.17 s instead of 0.3 s (records made the same way in
+  // Python: an actuator lag beside a delay of 0.246 s). The line's level before the record is a
+  // nuisance parameter per record beside the initial state (candidate_fit.cc).
+  const GapCase shape = LevelsCase(EffectKind::kTimeDelay, 331, 3000);
+  const double ts = shape.estimation.sample_time;
+  const Effect delay{EffectKind::kTimeDelay, {30 * ts}};
+  std::mt19937_64 rng(332);
+  GapRecord est = shape.estimation, val = shape.validation;
+  const long warm = 3000;  // the run before the record, at the level c: settled
+  for (auto [r, level] : {std::pair{&est, 0.8}, std::pair{&val, -0.7}}) {
+    const double c = level * r->u.cwiseAbs().maxCoeff();
+    Eigen::VectorXd u(warm + r->u.size());
+    u << Eigen::VectorXd::Constant(warm, c), r->u;
+    const Eigen::VectorXd y = SimulateWithEffect(shape.sim, delay, u, ts).tail(r->u.size());
+    std::normal_distribution<double> noise(0.0, Rms(y.array() - y.mean()) * std::pow(10.0, -30.0 / 20));
+    r->y = y;
+    for (long k = 0; k < r->y.size(); ++k) r->y(k) += noise(rng);
+  }
+  const GapReport report = DiagnoseGap(shape.sim, {est}, {val});
+  const GapVerdict& v = report.verdict;
+  std::printf("delay on a record started mid-run: verdict %s (%zu effects), tau %.4f (truth %.4f), NRMSE %.4f floor %.4f\n",
+              v.effect.c_str(), v.effects.size(), v.params.params.empty() ? NAN : v.params.params[0],
+              delay.params[0], v.nrmse_after, v.noise_nrmse);
+  ExpectNamedAtTheFloor(v, {"time_delay"});
+  ExpectParameterNear(v, EffectKind::kTimeDelay, 0, delay.params[0], 0.02);
 }
 
 TEST(GapPairTest, ADelayBesideFrictionIsFoundFromG0AsGiven) {
