@@ -80,6 +80,29 @@ Eigen::MatrixXd WithPreRecord(const Eigen::MatrixXd& free, const Eigen::VectorXd
   return out;
 }
 
+// The nuisance coefficients of a rig settled at a constant input before the record, per unit of
+// the level it then reads: x0 = (I − A)⁻¹B (the sampled plant's equilibrium, in FreeResponse's
+// coordinates) and, with a delay line (PreRecordResponse), its level 1; divided by the output
+// C x0 + D. Empty where the plant has no equilibrium (an integrator: I − A singular) or no
+// static gain.
+Eigen::VectorXd SettledDirection(const TransferFunction& plant, double ts, bool with_line) {
+  TransferFunction g = plant;
+  g.delay_s = 0;
+  if (g.Order() == 0) return Eigen::VectorXd();
+  const StateSpace d = DiscretizeZoh(ToStateSpace(g), ts);
+  const long n = d.A.rows();
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(Eigen::MatrixXd::Identity(n, n) - d.A);
+  if (!lu.isInvertible()) return Eigen::VectorXd();
+  const Eigen::VectorXd x = lu.solve(d.B.col(0));
+  const double level = (d.C.row(0) * x)(0, 0) + d.D(0, 0);
+  if (!std::isfinite(level) || !(std::abs(level) > 1e-12 * (d.B.norm() + std::abs(d.D(0, 0)))) || !x.allFinite())
+    return Eigen::VectorXd();
+  Eigen::VectorXd out(n + (with_line ? 1 : 0));
+  out.head(n) = x / level;
+  if (with_line) out(n) = 1.0 / level;
+  return out;
+}
+
 // Least squares through small normal equations, equilibrated (unit diagonal) and solved by a
 // symmetric eigen-decomposition with a relative cut-off (a minimum-norm solution where the
 // columns are nearly dependent: the fitted values, all that matters here, are then still the
@@ -400,7 +423,8 @@ namespace {
 // is the mirror basin), and the state the segment would need were the maps the identity (the
 // right basin when the simulation from rest has drifted into a clip that the rig's own state
 // never reaches: at x0 = 0 the clipped samples have no slope, and Gauss–Newton could not leave
-// them). Exact for the maps' pieces the samples sit on.
+// them). Exact for the maps' pieces the samples sit on. Behind a |y| sensor a third start from
+// a grid over the level where the segment began (below: `settled`).
 //
 // `offset_inside` (the maps are clips only): ŷ = clip(z + F·x0 + b), J = diag(clip')·[1, F].
 // The same model — clip(s, lo, hi) + b = clip(s + b, lo + b, hi + b) — with the limits where
@@ -415,7 +439,7 @@ namespace {
 Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen::VectorXd& z,
                                           const Eigen::MatrixXd& free, const std::vector<Effect>& maps,
                                           Eigen::VectorXd* fitted, bool offset_inside,
-                                          const Eigen::MatrixXd& extra) {
+                                          const Eigen::MatrixXd& extra, const Eigen::VectorXd& settled) {
   const long len = y.size(), rows = std::min<long>(len, free.rows()), n = free.cols();
   const long m_extra = extra.rows() == len ? extra.cols() : 0;  // the sensor's columns after the maps
   const Eigen::MatrixXd* sensor = m_extra > 0 ? &extra : nullptr;
@@ -466,16 +490,30 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
     const Eigen::VectorXd other = refine(OffsetAndStateFit(y - z, free, nullptr, sensor), sse_identity);
     if (sse_identity < sse_rest) coef = other;
   }
-  // A |y| sensor on a plant whose free response holds a level (an integrator: F v ≈ 1): the
-  // level c decides where the pre-map signal z + c folds, and both starts above can leave it
-  // on one side of zero for the whole segment (the fold unused, a local minimum). A third start
-  // from the best c of a grid over the levels that put the fold inside the segment, b by least
-  // squares for each.
+  // A |y| sensor: the level c the segment starts at decides where the pre-map signal folds,
+  // and both starts above can leave it on the wrong side of zero (the mirror basin: a plant that
+  // starts at −0.05 and rises through the fold, read as one that starts at +0.05 and never
+  // folds), or on one side for the whole segment (the fold unused). A third start from the best
+  // c of a grid over the levels that put the fold inside the segment, b by least squares for
+  // each, along the direction that holds a level: on an integrator the free response's own
+  // (F v ≈ 1, the level held for the whole segment); on a plant with an equilibrium, `settled`
+  // (SettledDirection: the rig at rest at a constant input before the record, its delay line
+  // included, whose level then decays as the record's input takes over; `--pairs any --seed 974
+  // --excitation steps` case 8, a delay behind |y| that starts just below the fold).
   const bool fold = std::any_of(maps.begin(), maps.end(), IsAbsoluteSensor);
-  if (fold && n > 0 && !offset_inside && rows == len) {
+  if (fold && n > 0 && !offset_inside) {
     const Eigen::VectorXd ones = Eigen::VectorXd::Ones(len);
-    const Eigen::VectorXd v = free.topRows(rows).completeOrthogonalDecomposition().solve(ones);
-    if ((free.topRows(rows) * v - ones).norm() < 1e-3 * std::sqrt(double(len))) {
+    Eigen::VectorXd v, shift;  // the coefficients per unit level, and the level they add over the segment
+    if (rows == len) {
+      v = free.topRows(rows).completeOrthogonalDecomposition().solve(ones);
+      if ((free.topRows(rows) * v - ones).norm() < 1e-3 * std::sqrt(double(len))) shift = ones;
+    }
+    if (shift.size() == 0 && settled.size() == n) {
+      v = settled;
+      shift = Eigen::VectorXd::Zero(len);
+      shift.head(rows) = free.topRows(rows) * v;
+    }
+    if (shift.size() == len) {
       const double lo = -z.maxCoeff(), hi = -z.minCoeff();
       double best_grid = INFINITY;
       Eigen::VectorXd grid_coef;
@@ -483,7 +521,7 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
         const double c = lo + (hi - lo) * i / 40.0;
         Eigen::VectorXd trial = Eigen::VectorXd::Zero(k);
         trial.segment(1, n) = c * v;
-        Eigen::VectorXd m = z.array() + c;
+        Eigen::VectorXd m = z + c * shift;
         ApplyOutputMaps(maps, m, nullptr);
         trial(0) = (y - m).mean();
         const double sse = (y - m).array().square().sum() - len * trial(0) * trial(0);
@@ -521,6 +559,10 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
   const bool feedback = std::any_of(spec_.kinds.begin(), spec_.kinds.end(), IsFeedbackEffect);
   const Eigen::MatrixXd first =
       WithPreRecord(free, spec_.free_state ? PreRecordResponse(linear, record.sample_time, longest, feedback) : Eigen::VectorXd());
+  // Behind a |y| sensor, the rig settled before the record: a direction for the fold's grid.
+  const Eigen::VectorXd settled = std::any_of(maps.begin(), maps.end(), IsAbsoluteSensor) && free.cols() > 0
+                                      ? SettledDirection(linear, record.sample_time, first.cols() > free.cols())
+                                      : Eigen::VectorXd();
   if (!maps.empty() && !segments.empty()) {  // the unscored warm-up: the maps alone
     Eigen::VectorXd head = y.head(segments.front().first);
     ApplyOutputMaps(maps, head, nullptr);
@@ -543,7 +585,7 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
     if (!maps.empty()) {  // the state inside the maps, the offset (and the sensor's columns) after them
       Eigen::VectorXd fitted;
       coef = OffsetAndStateThroughMaps(record.y.segment(start, len), y.segment(start, len), state, maps, &fitted,
-                                       offset_inside, sensor);
+                                       offset_inside, sensor, start == 0 ? settled : Eigen::VectorXd());
       y.segment(start, len) = fitted;
     } else {
       coef = OffsetAndStateFit(record.y.segment(start, len) - y.segment(start, len), state, nullptr,

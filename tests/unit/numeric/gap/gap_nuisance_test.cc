@@ -700,6 +700,20 @@ TEST(GapPairTest, AResonanceBehindAnAbsoluteValueSensorIsTriedWhenADelayPassesIn
   ExpectParameterNear(v, EffectKind::kUnmodelledResonance, 1, c.effects[0].params[1], 0.05);
 }
 
+TEST(GapPairTest, ADelayBehindAnAbsoluteValueSensorStartingJustBelowTheFoldIsADelay) {
+  // `--seed 974 --excitation steps`, case 8: a delay (0.086 s) with an |y| sensor; the rig sits
+  // at −0.05 before the validation record (its actuator offset) and rises through the fold when
+  // the first step arrives. Both starts of the segment's state put it at +0.05 (the mirror
+  // basin, no dip), which left the delay pair 6× the floor over the first 200 samples; a
+  // resonance's free states covered that, and resonance + |y| was named at the floor. The
+  // grid over the level the rig was settled at finds the dip.
+  const GapCase c = AnyPairCase(8, {EffectKind::kTimeDelay, EffectKind::kSensorNonlinearity}, 974, "steps");
+  const GapReport report = DiagnoseAndPrint(c, "delay + |y| sensor");
+  const GapVerdict& v = report.verdict;
+  ExpectNamedAtTheFloor(v, {"sensor_nonlinearity", "time_delay"});
+  ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.02);
+}
+
 TEST(GapPairTest, TwoTiedSinglesAboveTheFloorAreSettledByTheirPair) {
   // `--seed 970 --excitation multisine`, case 41: backlash (r 0.106) with a cubic spring. Each
   // alone explains the same part of the gap (their validation BICs 0.07 apart, five times the
