@@ -930,6 +930,16 @@ static void ReleaseUnreachedLimits(const FitContext& ctx, CandidateWork& w) {
   w = std::move(trial);
 }
 
+double VariantCriterion(const FitContext& ctx, const CandidateWork& trial, size_t variants) {
+  // Variants that extrapolate differently (the sensor map as a polynomial or as |y|) are chosen
+  // on the validation records, where the difference shows (a record whose output never changes
+  // sign cannot tell them apart; the polynomial's extra bend fitted there can fold the wrong way
+  // on another): the validation BIC. One variant: the estimation BIC, as for any fit.
+  if (variants > 1)
+    return ValidationBic(ctx.n_val, ctx.n_est, ValidationMse(ctx, trial.y_val), trial.fit.parameters, 0);
+  return ctx.n_est * std::log(trial.fit.estimation_mse) + trial.fit.parameters * std::log(double(ctx.n_est));
+}
+
 void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w) {
   const std::vector<GapRecord>& estimation = *ctx.estimation;
   (void)estimation;
@@ -965,8 +975,7 @@ void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w) {
     CandidateWork trial;
     FitSpec(ctx, spec, prefixes, starts, trial);
     evaluations += trial.fit.evaluations;
-    const double criterion = ctx.n_est * std::log(trial.fit.estimation_mse) +
-                             trial.fit.parameters * std::log(double(ctx.n_est));
+    const double criterion = VariantCriterion(ctx, trial, variants.size());
     if (criterion < best_criterion) {
       best_criterion = criterion;
       w = trial;

@@ -134,8 +134,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
       const auto points = BestStartPoints(pair_ctx, spec, {prefix, from_g0}, starts, 3);
       CandidateWork trial;
       FitSpecFrom(pair_ctx, spec, points, trial);
-      const double criterion = ctx.n_est * std::log(trial.fit.estimation_mse) +
-                               trial.fit.parameters * std::log(double(ctx.n_est));
+      const double criterion = VariantCriterion(ctx, trial, variants.size());
       if (criterion < best) best = criterion, chosen = trial;
     }
     return chosen;

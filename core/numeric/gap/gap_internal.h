@@ -279,6 +279,10 @@ void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& wor
 // integrator over the record, not a lag); ranking.cc.
 void MaskImplausibleDynamics(const Scales& scales, std::vector<CandidateWork>& work);
 
+// The criterion that picks one of an effect's variants (FitEffect, the pair search): the
+// validation BIC where there are several, the estimation BIC otherwise.
+double VariantCriterion(const FitContext& ctx, const CandidateWork& trial, size_t variants);
+
 // effect_pairs.cc: forward selection of a second effect after `first` (an eligible single
 // effect), each other effect added to it and refitted together; a pair is kept when it passes
 // the significance, signature and validation-BIC rules against `first` and beats `top_bic` (the
