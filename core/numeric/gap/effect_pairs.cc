@@ -91,12 +91,22 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
     std::vector<std::vector<double>> variants = {{}};
     if (k2 == EffectKind::kSensorNonlinearity) variants = {{}, {1.0}};
     if (k2 == EffectKind::kOutputQuantization) variants = {{ctx.q_step, ctx.q_phase}};
+    // The first effect's variant as its single fit chose it; a polynomial sensor map also as |y|
+    // (`--pairs any --seed 973 --excitation noise` case 38: a dead zone behind |y|, where the
+    // polynomial alone fitted best, and beside the dead zone folded the wrong way on validation).
+    std::vector<std::vector<double>> firsts = {first.spec.fixed.front()};
+    if (k1 == EffectKind::kSensorNonlinearity && firsts.front().empty()) firsts.push_back({1.0});
     double best = INFINITY;
+    for (const auto& fixed_first : firsts)
     for (const auto& fixed : variants) {
-      CandidateSpec spec = SpecFor(ctx, {k1, k2}, {first.spec.fixed.front(), fixed});
-      // The prefix: the first's fit (θ, du, φ_1); du where the first had none starts at 0.
+      CandidateSpec spec = SpecFor(ctx, {k1, k2}, {fixed_first, fixed});
+      // The prefix: the first's fit (θ, du, φ_1); du where the first had none starts at 0; the
+      // first's other variant keeps θ and du (|y| has no parameters of its own).
       Eigen::VectorXd prefix = first.x;
-      if (spec.input_offset && !first.spec.input_offset) {
+      if (fixed_first != first.spec.fixed.front()) {
+        const Candidate probe(*ctx.g0, spec, ctx.scales, 1);
+        prefix = first.x.head(probe.BlockStart(0));
+      } else if (spec.input_offset && !first.spec.input_offset) {
         const Candidate probe(*ctx.g0, spec, ctx.scales, 1);
         prefix = Eigen::VectorXd::Zero(probe.BlockStart(1));
         const int plant = probe.PlantParams();
@@ -134,7 +144,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
       const auto points = BestStartPoints(pair_ctx, spec, {prefix, from_g0}, starts, 3);
       CandidateWork trial;
       FitSpecFrom(pair_ctx, spec, points, trial);
-      const double criterion = VariantCriterion(ctx, trial, variants.size());
+      const double criterion = VariantCriterion(ctx, trial, firsts.size() * variants.size());
       if (criterion < best) best = criterion, chosen = trial;
     }
     return chosen;

@@ -714,6 +714,20 @@ TEST(GapPairTest, ADelayBehindAnAbsoluteValueSensorStartingJustBelowTheFoldIsADe
   ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.02);
 }
 
+TEST(GapPairTest, ADeadZoneBehindAnAbsoluteValueSensorIsFoundFromTheSensorMapAsAbsoluteValue) {
+  // `--seed 973 --excitation noise`, case 38: a dead zone (0.48, actuator offset 0.26) read
+  // through an |y| sensor. Alone, the dead zone takes the fold's other half as a far offset and a
+  // wide flat part (du 1.16, d 1.44), and the sensor map fits best as a polynomial; beside the
+  // dead zone that polynomial found the dead zone but folded the wrong way on validation (ΔBIC
+  // +2737), and the verdict was the dead zone alone at NRMSE 0.19 for a floor of 0.028. In a pair
+  // the polynomial sensor map is also tried as |y|, chosen on validation.
+  const GapCase c = AnyPairCase(38, {EffectKind::kDeadZone, EffectKind::kSensorNonlinearity}, 973, "noise");
+  const GapReport report = DiagnoseAndPrint(c, "dead zone + |y| sensor");
+  const GapVerdict& v = report.verdict;
+  ExpectNamedAtTheFloor(v, {"dead_zone", "sensor_nonlinearity"});
+  ExpectParameterNear(v, EffectKind::kDeadZone, 0, c.effects[0].params[0], 0.03);
+}
+
 TEST(GapPairTest, TwoTiedSinglesAboveTheFloorAreSettledByTheirPair) {
   // `--seed 970 --excitation multisine`, case 41: backlash (r 0.106) with a cubic spring. Each
   // alone explains the same part of the gap (their validation BICs 0.07 apart, five times the
