@@ -55,7 +55,7 @@ Eigen::VectorXd PreRecordResponse(const TransferFunction& plant, double ts, long
   if (rounded) g.delay_s = 0;
   const StateSpace c = ToStateSpace(g), d = DiscretizeZoh(c, ts);
   const long whole = rounded ? std::lround(samples) : std::lround(d.delay_s / ts);
-  if (whole <= 0 || n <= 0) return Eigen::VectorXd();
+  if (whole <= 0) return Eigen::VectorXd();
   Eigen::VectorXd out(n), x = Eigen::VectorXd::Zero(d.A.rows());
   x.tail(d.A.rows() - c.A.rows()).setOnes();  // a fractional delay's state: the previous input, c too
   double largest = 0;
@@ -78,6 +78,16 @@ Eigen::MatrixXd WithPreRecord(const Eigen::MatrixXd& free, const Eigen::VectorXd
   out.topLeftCorner(free.rows(), free.cols()) = free;
   out.col(free.cols()).head(pre.size()) = pre;
   return out;
+}
+
+// The state columns of a record's first segment for a candidate of `spec` whose linear part is
+// `linear`: F and the delay line's level (beside friction or a cubic spring the simulator rounds
+// the delay to whole samples).
+Eigen::MatrixXd FirstSegmentState(const CandidateSpec& spec, const TransferFunction& linear, double ts, long n,
+                                  const Eigen::MatrixXd& free) {
+  if (!spec.free_state) return free;
+  const bool feedback = std::any_of(spec.kinds.begin(), spec.kinds.end(), IsFeedbackEffect);
+  return WithPreRecord(free, PreRecordResponse(linear, ts, n, feedback));
 }
 
 // The nuisance coefficients of a rig settled at a constant input before the record, per unit of
@@ -556,9 +566,7 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
   const TransferFunction linear = LinearPart(x);
   const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(linear, record.sample_time, longest)
                                                 : Eigen::MatrixXd(longest, 0);
-  const bool feedback = std::any_of(spec_.kinds.begin(), spec_.kinds.end(), IsFeedbackEffect);
-  const Eigen::MatrixXd first =
-      WithPreRecord(free, spec_.free_state ? PreRecordResponse(linear, record.sample_time, longest, feedback) : Eigen::VectorXd());
+  const Eigen::MatrixXd first = FirstSegmentState(spec_, linear, record.sample_time, longest, free);
   // Behind a |y| sensor, the rig settled before the record: a direction for the fold's grid.
   const Eigen::VectorXd settled = std::any_of(maps.begin(), maps.end(), IsAbsoluteSensor) && free.cols() > 0
                                       ? SettledDirection(linear, record.sample_time, first.cols() > free.cols())
@@ -635,15 +643,13 @@ TransferFunction Candidate::LinearPart(const Eigen::VectorXd& x) const {
 
 long Candidate::NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapRecord>& records) const {
   const TransferFunction linear = LinearPart(x);
-  const bool feedback = std::any_of(spec_.kinds.begin(), spec_.kinds.end(), IsFeedbackEffect);
   long columns = 0;
   for (const GapRecord& record : records) {
     const auto segments = Segments(record, spec_.segment);
     const long longest = Longest(segments);
     const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(linear, record.sample_time, longest)
                                                   : Eigen::MatrixXd(longest, 0);
-    const Eigen::MatrixXd first =
-        WithPreRecord(free, spec_.free_state ? PreRecordResponse(linear, record.sample_time, longest, feedback) : Eigen::VectorXd());
+    const Eigen::MatrixXd first = FirstSegmentState(spec_, linear, record.sample_time, longest, free);
     for (const auto& segment : segments) {
       long rank = 0;
       const Eigen::MatrixXd sensor = SensorColumns(record, segment.first, segment.second, spec_.drift);
