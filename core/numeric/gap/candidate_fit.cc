@@ -537,9 +537,13 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
         const double sse = (y - m).array().square().sum() - len * trial(0) * trial(0);
         if (sse < best_grid) best_grid = sse, grid_coef = trial;
       }
-      double sse_fold = INFINITY;
-      const Eigen::VectorXd folded = refine(grid_coef, sse_fold);
-      if (sse_fold < std::min(sse_rest, sse_identity)) coef = folded;
+      // No finite point on the grid (a simulation that has left the reals, a direction that
+      // overflows): no third start.
+      if (grid_coef.size() == k) {
+        double sse_fold = INFINITY;
+        const Eigen::VectorXd folded = refine(grid_coef, sse_fold);
+        if (sse_fold < std::min(sse_rest, sse_identity)) coef = folded;
+      }
     }
   }
   if (fitted) evaluate(coef, *fitted, nullptr);

@@ -728,6 +728,19 @@ TEST(GapPairTest, ADeadZoneBehindAnAbsoluteValueSensorIsFoundFromTheSensorMapAsA
   ExpectParameterNear(v, EffectKind::kDeadZone, 0, c.effects[0].params[0], 0.03);
 }
 
+TEST(GapPairTest, AnAbsoluteValueSensorOnAFourthOrderRigWhoseFitLeavesTheRealsIsFittedNotACrash) {
+  // `--pairs any --seed 971 --plants two-mass --excitation levels`, case 32: an input limit with
+  // an |y| sensor on a two-mass rig. During the sensor map's fit a trial simulation left the
+  // reals; the grid over the |y| fold's start level then had no finite point, and refining from
+  // that empty start read out of bounds (a segmentation fault of `idrig gap bench`, found at
+  // this stop's first build). No finite grid point now means no third start.
+  const std::vector<EffectKind> truth = BenchCaseTruth(32, 1.0, true);
+  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kInputSaturation, EffectKind::kSensorNonlinearity}));
+  const GapCase c = OffsetBenchCase(971, 32, truth, false, "levels", "two-mass");
+  const GapReport report = DiagnoseAndPrint(c, "input limit + |y| sensor, two-mass");
+  ExpectNamedAtTheFloor(report.verdict, {"input_saturation", "sensor_nonlinearity"});
+}
+
 TEST(GapPairTest, TwoTiedSinglesAboveTheFloorAreSettledByTheirPair) {
   // `--seed 970 --excitation multisine`, case 41: backlash (r 0.106) with a cubic spring. Each
   // alone explains the same part of the gap (their validation BICs 0.07 apart, five times the
