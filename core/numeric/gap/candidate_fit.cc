@@ -17,12 +17,18 @@ namespace {
 
 double Pos(double v) { return std::exp(std::clamp(v, -30.0, 30.0)); }
 
-// Free response of the plant's sampled realisation: row k = C A^k (delay-free), n rows.
-Eigen::MatrixXd FreeResponse(const TransferFunction& plant, double ts, long n) {
+// The plant's delay-free sampled realisation (zero-order hold): one discretisation per prediction,
+// shared by its free response, its settled direction and a rounded delay line. Order 0: no states.
+StateSpace SampledUndelayed(const TransferFunction& plant, double ts) {
   TransferFunction g = plant;
   g.delay_s = 0;
-  if (g.Order() == 0) return Eigen::MatrixXd(n, 0);
-  const StateSpace d = DiscretizeZoh(ToStateSpace(g), ts);
+  if (g.Order() == 0) return StateSpace{};
+  return DiscretizeZoh(ToStateSpace(g), ts);
+}
+
+// Free response of the plant's sampled realisation d (SampledUndelayed): row k = C A^k, n rows.
+Eigen::MatrixXd FreeResponse(const StateSpace& d, long n) {
+  if (d.A.rows() == 0) return Eigen::MatrixXd(n, 0);
   Eigen::MatrixXd f(n, d.A.rows());
   Eigen::RowVectorXd c = d.C.row(0);
   double largest = 0;
@@ -47,17 +53,17 @@ Eigen::MatrixXd FreeResponse(const TransferFunction& plant, double ts, long n) {
 // fractional part of the delay in the sampled plant, as in simulation); n rows at most, fewer
 // where it has decayed (the caller treats missing rows as zeros). Empty without a whole-sample
 // delay: the line is then empty and x0 alone is the state. `rounded`: the delay as the
-// simulator takes it beside a feedback effect (whole samples, rounded; no fractional part).
-Eigen::VectorXd PreRecordResponse(const TransferFunction& plant, double ts, long n, bool rounded) {
+// simulator takes it beside a feedback effect (whole samples, rounded; no fractional part), on
+// the delay-free realisation `undelayed` (SampledUndelayed) the caller already has.
+Eigen::VectorXd PreRecordResponse(const TransferFunction& plant, const StateSpace& undelayed, double ts, long n,
+                                  bool rounded) {
   const double samples = plant.delay_s / ts;
   if (n <= 0 || !((rounded ? std::round(samples) : std::floor(samples + 1e-12)) >= 1)) return Eigen::VectorXd();
-  TransferFunction g = plant;
-  if (rounded) g.delay_s = 0;
-  const StateSpace c = ToStateSpace(g), d = DiscretizeZoh(c, ts);
+  const StateSpace d = rounded ? undelayed : DiscretizeZoh(ToStateSpace(plant), ts);
   const long whole = rounded ? std::lround(samples) : std::lround(d.delay_s / ts);
   if (whole <= 0) return Eigen::VectorXd();
   Eigen::VectorXd out(n), x = Eigen::VectorXd::Zero(d.A.rows());
-  x.tail(d.A.rows() - c.A.rows()).setOnes();  // a fractional delay's state: the previous input, c too
+  x.tail(d.A.rows() - undelayed.A.rows()).setOnes();  // a fractional delay's state: the previous input, c too
   double largest = 0;
   for (long k = 0; k < n; ++k) {
     const double u = k < whole ? 1.0 : 0.0;
@@ -83,24 +89,21 @@ Eigen::MatrixXd WithPreRecord(const Eigen::MatrixXd& free, const Eigen::VectorXd
 // The state columns of a record's first segment for a candidate of `spec` whose linear part is
 // `linear`: F and the delay line's level (beside friction or a cubic spring the simulator rounds
 // the delay to whole samples).
-Eigen::MatrixXd FirstSegmentState(const CandidateSpec& spec, const TransferFunction& linear, double ts, long n,
-                                  const Eigen::MatrixXd& free) {
-  if (!spec.free_state) return free;
+Eigen::MatrixXd FirstSegmentState(const CandidateSpec& spec, const TransferFunction& linear,
+                                  const StateSpace& undelayed, double ts, long n, const Eigen::MatrixXd& free) {
+  if (!spec.free_state || free.cols() == 0) return free;
   const bool feedback = std::any_of(spec.kinds.begin(), spec.kinds.end(), IsFeedbackEffect);
-  return WithPreRecord(free, PreRecordResponse(linear, ts, n, feedback));
+  return WithPreRecord(free, PreRecordResponse(linear, undelayed, ts, n, feedback));
 }
 
 // The nuisance coefficients of a rig settled at a constant input before the record, per unit of
 // the level it then reads: x0 = (I − A)⁻¹B (the sampled plant's equilibrium, in FreeResponse's
 // coordinates) and, with a delay line (PreRecordResponse), its level 1; divided by the output
 // C x0 + D. Empty where the plant has no equilibrium (an integrator: I − A singular) or no
-// static gain.
-Eigen::VectorXd SettledDirection(const TransferFunction& plant, double ts, bool with_line) {
-  TransferFunction g = plant;
-  g.delay_s = 0;
-  if (g.Order() == 0) return Eigen::VectorXd();
-  const StateSpace d = DiscretizeZoh(ToStateSpace(g), ts);
+// static gain. `d`: the plant's delay-free sampled realisation (SampledUndelayed).
+Eigen::VectorXd SettledDirection(const StateSpace& d, bool with_line) {
   const long n = d.A.rows();
+  if (n == 0) return Eigen::VectorXd();
   const Eigen::FullPivLU<Eigen::MatrixXd> lu(Eigen::MatrixXd::Identity(n, n) - d.A);
   if (!lu.isInvertible()) return Eigen::VectorXd();
   const Eigen::VectorXd x = lu.solve(d.B.col(0));
@@ -568,12 +571,12 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
   const auto segments = Segments(record, spec_.segment);
   const long longest = Longest(segments);
   const TransferFunction linear = LinearPart(x);
-  const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(linear, record.sample_time, longest)
-                                                : Eigen::MatrixXd(longest, 0);
-  const Eigen::MatrixXd first = FirstSegmentState(spec_, linear, record.sample_time, longest, free);
+  const StateSpace sampled = spec_.free_state ? SampledUndelayed(linear, record.sample_time) : StateSpace{};
+  const Eigen::MatrixXd free = FreeResponse(sampled, longest);
+  const Eigen::MatrixXd first = FirstSegmentState(spec_, linear, sampled, record.sample_time, longest, free);
   // Behind a |y| sensor, the rig settled before the record: a direction for the fold's grid.
-  const Eigen::VectorXd settled = std::any_of(maps.begin(), maps.end(), IsAbsoluteSensor) && free.cols() > 0
-                                      ? SettledDirection(linear, record.sample_time, first.cols() > free.cols())
+  const Eigen::VectorXd settled = std::any_of(maps.begin(), maps.end(), IsAbsoluteSensor)
+                                      ? SettledDirection(sampled, first.cols() > free.cols())
                                       : Eigen::VectorXd();
   if (!maps.empty() && !segments.empty()) {  // the unscored warm-up: the maps alone
     Eigen::VectorXd head = y.head(segments.front().first);
@@ -651,9 +654,9 @@ long Candidate::NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapR
   for (const GapRecord& record : records) {
     const auto segments = Segments(record, spec_.segment);
     const long longest = Longest(segments);
-    const Eigen::MatrixXd free = spec_.free_state ? FreeResponse(linear, record.sample_time, longest)
-                                                  : Eigen::MatrixXd(longest, 0);
-    const Eigen::MatrixXd first = FirstSegmentState(spec_, linear, record.sample_time, longest, free);
+    const StateSpace sampled = spec_.free_state ? SampledUndelayed(linear, record.sample_time) : StateSpace{};
+    const Eigen::MatrixXd free = FreeResponse(sampled, longest);
+    const Eigen::MatrixXd first = FirstSegmentState(spec_, linear, sampled, record.sample_time, longest, free);
     for (const auto& segment : segments) {
       long rank = 0;
       const Eigen::MatrixXd sensor = SensorColumns(record, segment.first, segment.second, spec_.drift);

@@ -494,7 +494,6 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
   v.nuisance.initial_state = ctx.nuisance.segment > 0
                                  ? "free per segment of " + std::to_string(ctx.nuisance.segment) + " samples (least squares)"
                                  : "free per record (least squares)";
-  v.nuisance.initial_state += "; a delayed model also holds a free input level in its delay line at the start of each record";
 
   // G0 as given (with the nuisance), and G0 refitted (parameter_mismatch): the references.
   const Candidate as_is(g0, [&] {
@@ -877,6 +876,18 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
     v.explanation = named + " closes " + std::to_string(int(std::round(100 * v.shrink))) +
                     " % of the explainable gap on the validation records";
   }
+
+  // The reported model's delay line holds a free level before each record (PreRecordResponse,
+  // candidate_fit.cc) where its delay is a whole sample or more (rounded beside friction or a
+  // cubic spring, as the simulator takes it there).
+  double delay = v.plant.delay_s;
+  bool feedback = false;
+  for (const Effect& e : v.effects) {
+    if (e.kind == EffectKind::kTimeDelay && !e.params.empty()) delay += e.params[0];
+    feedback = feedback || IsFeedbackEffect(e.kind);
+  }
+  if ((feedback ? std::round(delay / ts) : std::floor(delay / ts + 1e-12)) >= 1)
+    v.nuisance.initial_state += "; the model's delay line also holds a free input level at the start of each record";
 
   report.where = LocateGap(g0, validation, floor.sigma);
   report.where.noise_nrmse = noise_nrmse;

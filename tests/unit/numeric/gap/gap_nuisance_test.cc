@@ -614,6 +614,8 @@ TEST(GapOffsetTest, ARecordStartedMidRunHasTheInputBeforeItInTheDelayLine) {
               delay.params[0], v.nrmse_after, v.noise_nrmse);
   ExpectNamedAtTheFloor(v, {"time_delay"});
   ExpectParameterNear(v, EffectKind::kTimeDelay, 0, delay.params[0], 0.02);
+  // The report says the line's level is a nuisance of the delayed model it reports.
+  EXPECT_NE(v.nuisance.initial_state.find("delay line"), std::string::npos) << v.nuisance.initial_state;
 }
 
 TEST(GapPairTest, ADelayBesideFrictionIsFoundFromG0AsGiven) {
@@ -637,6 +639,8 @@ TEST(GapPairTest, ALimitBesideADeadZoneIsNamedInTheDeadZonesCoordinates) {
   const GapReport report = DiagnoseAndPrint(c, "limit + dead zone");
   const GapVerdict& v = report.verdict;
   ExpectNamedAtTheFloor(v, {"dead_zone", "input_saturation"});
+  // No delay in the model reported: no delay line among its nuisance parameters.
+  EXPECT_EQ(v.nuisance.initial_state.find("delay line"), std::string::npos) << v.nuisance.initial_state;
   const double d = c.effects[1].params[0];
   for (const Effect& e : v.effects) {
     if (e.kind == EffectKind::kDeadZone) {
