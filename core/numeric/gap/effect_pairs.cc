@@ -141,7 +141,13 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
       // taken by the plant's poles), a basin the pair fit does not leave.
       Eigen::VectorXd from_g0 = prefix;
       from_g0.head(base.PlantParams()).setZero();
-      const auto points = BestStartPoints(pair_ctx, spec, {prefix, from_g0}, starts, 3);
+      // The first's other variant (|y| for a polynomial sensor map) also from G0 as given with no
+      // actuator offset: the polynomial's plant and offset have bent to make up for the fold it
+      // lacks (`--pairs any --seed 971 --plants two-mass` case 38: a dead zone behind |y|, from
+      // those the pair fit wandered off; from G0 it finds the dead zone at the floor).
+      std::vector<Eigen::VectorXd> prefixes = {prefix, from_g0};
+      if (fixed_first != first.spec.fixed.front()) prefixes.push_back(Eigen::VectorXd::Zero(prefix.size()));
+      const auto points = BestStartPoints(pair_ctx, spec, prefixes, starts, 3);
       CandidateWork trial;
       FitSpecFrom(pair_ctx, spec, points, trial);
       const double criterion = VariantCriterion(ctx, trial, firsts.size() * variants.size());

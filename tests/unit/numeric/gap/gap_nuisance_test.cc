@@ -218,10 +218,12 @@ INSTANTIATE_TEST_SUITE_P(
 // Case `index` of `idrig gap bench --seed SEED --offsets` with the rest of the options given:
 // an integrating plant, an excitation, a plant family ("" for the default).
 GapCase OffsetBenchCase(uint64_t seed, int index, const std::vector<EffectKind>& truth, bool integrating = false,
-                        const std::string& excitation = "", const std::string& plants = "", int samples = 0) {
+                        const std::string& excitation = "", const std::string& plants = "", int samples = 0,
+                        double sample_time = 0) {
   std::mt19937_64 rng(BenchCaseSeed(seed, index));
   GapCaseOptions options;
   if (samples > 0) options.samples = samples;
+  if (sample_time > 0) options.sample_time = sample_time;
   options.offsets = true;
   options.integrating = integrating;
   options.excitation = excitation;
@@ -738,6 +740,32 @@ TEST(GapPairTest, AnAbsoluteValueSensorOnAFourthOrderRigWhoseFitLeavesTheRealsIs
   ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kInputSaturation, EffectKind::kSensorNonlinearity}));
   const GapCase c = OffsetBenchCase(971, 32, truth, false, "levels", "two-mass");
   DiagnoseTheTruthAtTheFloor(c, "input limit + |y| sensor, two-mass");
+}
+
+TEST(GapPairTest, ADeadZoneBehindAnAbsoluteValueSensorOnAFourthOrderRigIsFoundFromG0AsGiven) {
+  // `--pairs any --seed 971 --plants two-mass --excitation levels`, case 38: a dead zone (0.334)
+  // read through an |y| sensor. The sensor map fitted alone is a polynomial whose plant and
+  // actuator offset have bent to make up for the fold; the |y| variant of the pair started from
+  // those wandered off, and sensor map + friction was named at 14 times the floor. The |y|
+  // variant is also started from G0 as given, with no actuator offset.
+  const std::vector<EffectKind> truth = BenchCaseTruth(38, 1.0, true);
+  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kDeadZone, EffectKind::kSensorNonlinearity}));
+  const GapCase c = OffsetBenchCase(971, 38, truth, false, "levels", "two-mass");
+  const GapVerdict v = DiagnoseTheTruthAtTheFloor(c, "dead zone + |y| sensor, two-mass");
+  ExpectParameterNear(v, EffectKind::kDeadZone, 0, c.effects[0].params[0], 0.03);
+}
+
+TEST(GapPairTest, ADelayRivalledByADampedModeIsStillPairedWithTheLimit) {
+  // `--pairs any --seed 978 --ts 0.05 --excitation levels`, case 2: a delay of two samples with
+  // an input limit on a first-order plant. Alone, a damped mode (ζ 0.57) fits 6 BIC ahead of
+  // the delay (a Padé-like stand-in); its pair with the limit reached the floor first and the
+  // search stopped, naming resonance + limit. The delay, a near rival, has its pair searched too,
+  // and with one parameter fewer it has the lower validation BIC.
+  const std::vector<EffectKind> truth = BenchCaseTruth(2, 1.0, true);
+  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kTimeDelay, EffectKind::kInputSaturation}));
+  const GapCase c = OffsetBenchCase(978, 2, truth, false, "levels", "", 0, 0.05);
+  const GapVerdict v = DiagnoseTheTruthAtTheFloor(c, "delay + limit, Ts 0.05 s");
+  ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.02);
 }
 
 TEST(GapPairTest, TwoTiedSinglesAboveTheFloorAreSettledByTheirPair) {
