@@ -13,7 +13,11 @@
 // dynamics a sampled rig output shows move far less than a quarter of its range away from their
 // own running median and straight back. It is not a glitch when the input has an isolated
 // excursion (against the input's whole range) at t or t − 1: a one-sample input pulse may drive
-// a direct-feedthrough output there. Nothing is marked when the runs of marks (events) exceed
+// a direct-feedthrough output there. A run of such samples is a glitch only when it is entered
+// and left sharply: each jump (in from the sample before, out to the sample after) above half the
+// threshold and above 1.5 times the largest |Δy| of the h samples on either side (the peaks of a
+// coarsely sampled oscillation stand as far from their running median but are reached through
+// samples in between). Nothing is marked when the runs of marks (events) exceed
 // max(2, 0.2 % of the samples), or the marked samples 5 times that: then the excursions are the
 // record's character, not faults. Marked samples are
 // bridged linearly between their unmarked neighbours, and every one is reported.

@@ -115,28 +115,29 @@ TEST(OutputGlitches, FeedthroughPulsesAndFrequentExcursionsAreNotGlitches) {
 // output's range off is found, and nothing that was not injected is touched (a dropout to zero
 // where the signal is near zero is no gross glitch and may stay). Three three-sample runs in
 // 4000 samples are three events, within the rarity limit of 8, though their 9 samples are not.
-TEST(OutputGlitches, TheBenchsInjectedGlitchesAreFoundAndNothingElse) {
+// `all_gross`: every gross glitch must be found (else only: nothing else is touched).
+void ExpectInjectedGlitchesFoundAndNothingElse(uint64_t seed, const GapCaseOptions& options, double combo_share,
+                                               bool all_gross) {
   int runs_checked = 0;
   for (int index = 0; index < 13; ++index) {
-    std::mt19937_64 rng(BenchCaseSeed(731, index));
-    GapCaseOptions options;
-    options.offsets = true;
-    options.samples = 4000;
-    GapCase c = MakeGapCase(BenchCaseTruth(index, 0.0), rng, options);
+    std::mt19937_64 rng(BenchCaseSeed(seed, index));
+    GapCase c = MakeGapCase(BenchCaseTruth(index, combo_share, true), rng, options);
     Eigen::VectorXd y = c.estimation.y;
     const Eigen::VectorXd clean = y;
     AddGlitches(y, 3, rng);
     const Eigen::VectorXd measured = y;
     const double range = clean.maxCoeff() - clean.minCoeff();
     const GlitchScan scan = BridgeOutputGlitches(y, c.estimation.u);
-    ASSERT_FALSE(scan.too_many) << "case " << index << ": " << scan.events << " events";
+    if (all_gross) {
+      ASSERT_FALSE(scan.too_many) << "case " << index << ": " << scan.events << " events";
+    }
     std::vector<bool> marked(static_cast<size_t>(y.size()), false);
     for (const OutputGlitch& g : scan.glitches) {
       marked[static_cast<size_t>(g.sample)] = true;
       EXPECT_NE(g.value, clean(g.sample)) << "case " << index << ": sample " << g.sample << " was not injected";
     }
     for (long t = 0; t < y.size(); ++t) {
-      if (std::abs(measured(t) - clean(t)) > 0.5 * range) {
+      if (all_gross && std::abs(measured(t) - clean(t)) > 0.5 * range) {
         EXPECT_TRUE(marked[static_cast<size_t>(t)]) << "case " << index << ": gross glitch at " << t << " missed";
       }
       if (!marked[static_cast<size_t>(t)]) {
@@ -146,6 +147,13 @@ TEST(OutputGlitches, TheBenchsInjectedGlitchesAreFoundAndNothingElse) {
     ++runs_checked;
   }
   EXPECT_EQ(runs_checked, 13);
+}
+
+TEST(OutputGlitches, TheBenchsInjectedGlitchesAreFoundAndNothingElse) {
+  GapCaseOptions options;
+  options.offsets = true;
+  options.samples = 4000;
+  ExpectInjectedGlitchesFoundAndNothingElse(731, options, 0.0, true);
 
   // Three bursts of three samples in 4000 samples.
   const long n = 4000;
@@ -160,6 +168,35 @@ TEST(OutputGlitches, TheBenchsInjectedGlitchesAreFoundAndNothingElse) {
   EXPECT_FALSE(scan.too_many);
   EXPECT_EQ(scan.events, 3);
   EXPECT_EQ(scan.glitches.size(), 9u);
+}
+
+// A rig sampled coarsely for its dynamics (Ts 0.05 s, corners up to 15 rad/s): a mode's peaks
+// last two or three samples and stand a quarter of the range from their running median, as a
+// glitch does, but are reached and left through samples in between. On the bench's pair records
+// at that rate (`gap bench --pairs any --ts 0.05`, where such peaks were bridged on 64 of 108
+// records) nothing is marked; with glitches injected, only injected samples are. (Not all of
+// them: at this rate the input's short levels are isolated excursions, and a glitch beside one
+// is excused as a possible feedthrough response, as it always was.)
+TEST(OutputGlitches, ThePeaksOfACoarselySampledRigAreNotGlitchesButInjectedOnesAre) {
+  GapCaseOptions options;
+  options.offsets = true;
+  options.samples = 4000;
+  options.sample_time = 0.05;
+  int records = 0;
+  for (int index = 0; index < 13; ++index) {
+    std::mt19937_64 rng(BenchCaseSeed(732, index));
+    GapCase c = MakeGapCase(BenchCaseTruth(index, 1.0, true), rng, options);
+    for (GapRecord* r : {&c.estimation, &c.validation}) {
+      const Eigen::VectorXd y = r->y;
+      const GlitchScan scan = BridgeOutputGlitches(r->y, r->u);
+      EXPECT_TRUE(scan.glitches.empty()) << "case " << index << ": " << scan.glitches.size()
+                                         << " marked, first at sample " << scan.glitches.front().sample;
+      EXPECT_EQ(r->y, y);
+      ++records;
+    }
+  }
+  EXPECT_EQ(records, 26);
+  ExpectInjectedGlitchesFoundAndNothingElse(733, options, 1.0, false);
 }
 
 }  // namespace
