@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "core/numeric/signal/robust_stats.h"
 
@@ -55,6 +56,23 @@ bool SharpRun(const Eigen::VectorXd& y, const std::vector<bool>& far, long a, lo
   return a > 0 || b < n;
 }
 
+// The runs [a, b) of marked samples, in order.
+std::vector<std::pair<long, long>> Runs(const std::vector<bool>& marked) {
+  std::vector<std::pair<long, long>> runs;
+  const long n = static_cast<long>(marked.size());
+  for (long t = 0; t < n;) {
+    if (!marked[static_cast<size_t>(t)]) {
+      ++t;
+      continue;
+    }
+    long end = t;
+    while (end < n && marked[static_cast<size_t>(end)]) ++end;
+    runs.emplace_back(t, end);
+    t = end;
+  }
+  return runs;
+}
+
 double Span(const Eigen::VectorXd& x) {
   std::vector<double> v(x.data(), x.data() + x.size());
   return QuantileOf(v, 0.995) - QuantileOf(v, 0.005);
@@ -100,8 +118,8 @@ GlitchScan BridgeOutputGlitches(Eigen::VectorXd& y, const Eigen::MatrixXd& input
   if (scan.excursions == 0) return scan;
   // Rarity counts events (runs of marked samples), not samples: a glitch of three samples is one
   // fault, and three such faults in 4000 samples are still rare.
-  for (long t = 0; t < n; ++t)
-    if (marked[static_cast<size_t>(t)] && (t == 0 || !marked[static_cast<size_t>(t - 1)])) ++scan.events;
+  const std::vector<std::pair<long, long>> runs = Runs(marked);
+  scan.events = static_cast<long>(runs.size());
   const long limit = std::max<long>(2, static_cast<long>(0.002 * static_cast<double>(n)));
   if (scan.events > limit || scan.excursions > kHalfWindow * limit) {
     scan.too_many = true;
@@ -112,27 +130,11 @@ GlitchScan BridgeOutputGlitches(Eigen::VectorXd& y, const Eigen::MatrixXd& input
   // The peaks of an oscillation a few samples long (a coarsely sampled rig: a mode of 12 rad/s at
   // Ts 0.05 s) stand as far from their running median, but are reached and left through samples
   // in between (`gap bench --ts 0.05`: such peaks were bridged as glitches, on 64 of 108 records).
-  std::vector<bool> sharp(static_cast<size_t>(n), false);
-  for (long t = 0; t < n;) {
-    if (!marked[static_cast<size_t>(t)]) {
-      ++t;
-      continue;
-    }
-    long end = t;
-    while (end < n && marked[static_cast<size_t>(end)]) ++end;
-    if (SharpRun(y, far, t, end, threshold))
-      for (long k = t; k < end; ++k) sharp[static_cast<size_t>(k)] = true;
-    t = end;
-  }
-  marked = sharp;
-  // Bridge each run of marked samples between its unmarked neighbours (held at an end).
-  for (long t = 0; t < n;) {
-    if (!marked[static_cast<size_t>(t)]) {
-      ++t;
-      continue;
-    }
-    long end = t;
-    while (end < n && marked[static_cast<size_t>(end)]) ++end;
+  std::vector<std::pair<long, long>> glitches;
+  for (const auto& [a, b] : runs)
+    if (SharpRun(y, far, a, b, threshold)) glitches.emplace_back(a, b);
+  // Bridge each glitch between its unmarked neighbours (held at an end).
+  for (const auto& [t, end] : glitches) {
     const bool has_left = t > 0, has_right = end < n;
     const double left = has_left ? y(t - 1) : y(end), right = has_right ? y(end) : y(t - 1);
     for (long k = t; k < end; ++k) {
@@ -141,7 +143,6 @@ GlitchScan BridgeOutputGlitches(Eigen::VectorXd& y, const Eigen::MatrixXd& input
       scan.glitches.push_back({k, y(k), bridged});
       y(k) = bridged;
     }
-    t = end;
   }
   return scan;
 }
