@@ -94,7 +94,10 @@ Rig SensorRig(double wz_over_w0, double quadratic, double cubic, uint64_t noise_
 // NRMSE 0.41 against 0.51) but its validation gain over the verdict is z = 1.48 with the
 // Newey–West lag at its cap (ρ of the squared-error differences clamped at 0.99), below 2.31, so
 // it is not adopted; at stop 30 (CI, 350/350) it passed. Which of the fit's starts wins, and so
-// the gain, moves with the machine's arithmetic: docs/gap.md, trade-offs.
+// the gain, moves with the machine's arithmetic: docs/gap.md, trade-offs. At stop 33 it passes
+// here (linear part NRMSE 0.41, the map after it 0.0317), and with the noise of seeds 405 and 406
+// (linear part 0.066), but not with seed 407 (the linear part's fit stops at 0.116 and no map
+// is named after it): the linear part's basin still moves with the draw; left disabled.
 TEST(GapLinearOrderTest, DISABLED_MissingAntiResonanceThenASensorMapIsUnmodelledDynamicsThenTheMap) {
   const Rig rig = SensorRig(1.3, 0.15, -0.1, 402);
   const GapReport report = DiagnoseGap(rig.c.sim, {rig.c.estimation}, {rig.c.validation});
