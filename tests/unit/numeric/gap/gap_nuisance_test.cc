@@ -768,6 +768,20 @@ TEST(GapPairTest, ADelayRivalledByADampedModeIsStillPairedWithTheLimit) {
   ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.02);
 }
 
+TEST(GapPairTest, ASecondEffectUnderALooseFloorIsSearchedWhenTheResidualFollowsTheInput) {
+  // `--pairs any --seed 978 --ts 0.05 --excitation levels`, case 36: a dead zone with a cubic
+  // spring, sampled coarsely. The one-step ARX predictor of the floor reads σ 1.6 times the
+  // noise there, the dead zone alone (at twice the noise variance) sat within it, and the cubic
+  // spring was never searched for. What the dead zone leaves still follows the input, so the
+  // pair is searched.
+  const std::vector<EffectKind> truth = BenchCaseTruth(36, 1.0, true);
+  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kDeadZone, EffectKind::kCubicStiffness}));
+  const GapCase c = OffsetBenchCase(978, 36, truth, false, "levels", "", 0, 0.05);
+  const GapVerdict v = DiagnoseTheTruthAtTheFloor(c, "dead zone + cubic spring, Ts 0.05 s");
+  ExpectParameterNear(v, EffectKind::kDeadZone, 0, c.effects[0].params[0], 0.02);
+  ExpectParameterNear(v, EffectKind::kCubicStiffness, 0, c.effects[1].params[0], 0.05);
+}
+
 TEST(GapPairTest, TwoTiedSinglesAboveTheFloorAreSettledByTheirPair) {
   // `--seed 970 --excitation multisine`, case 41: backlash (r 0.106) with a cubic spring. Each
   // alone explains the same part of the gap (their validation BICs 0.07 apart, five times the
