@@ -546,12 +546,13 @@ TEST(GapOffsetTest, AModeWithoutAPeakIsNotNamedAResonance) {
 // `idrig gap bench --cases 54 --seed SEED --offsets --combos 1 --pairs any --excitation E
 // [--integrating]` (seed 950 and levels unless said): pairs that the rig-pair list does not hold.
 GapCase AnyPairCase(int index, const std::vector<EffectKind>& expected_truth = {}, uint64_t seed = 950,
-                    const std::string& excitation = "levels", bool integrating = false) {
+                    const std::string& excitation = "levels", bool integrating = false,
+                    const std::string& plants = "", double sample_time = 0) {
   const std::vector<EffectKind> truth = BenchCaseTruth(index, 1.0, true);
   if (!expected_truth.empty()) {
     EXPECT_EQ(truth, expected_truth) << "the bench's pair " << index << " moved";
   }
-  return OffsetBenchCase(seed, index, truth, integrating, excitation);
+  return OffsetBenchCase(seed, index, truth, integrating, excitation, plants, 0, sample_time);
 }
 
 std::vector<std::string> NamedSorted(const GapVerdict& v) {
@@ -736,9 +737,8 @@ TEST(GapPairTest, AnAbsoluteValueSensorOnAFourthOrderRigWhoseFitLeavesTheRealsIs
   // reals; the grid over the |y| fold's start level then had no finite point, and refining from
   // that empty start read out of bounds (a segmentation fault of `idrig gap bench`, found at
   // this stop's first build). No finite grid point now means no third start.
-  const std::vector<EffectKind> truth = BenchCaseTruth(32, 1.0, true);
-  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kInputSaturation, EffectKind::kSensorNonlinearity}));
-  const GapCase c = OffsetBenchCase(971, 32, truth, false, "levels", "two-mass");
+  const GapCase c = AnyPairCase(32, {EffectKind::kInputSaturation, EffectKind::kSensorNonlinearity}, 971,
+                                "levels", false, "two-mass");
   DiagnoseTheTruthAtTheFloor(c, "input limit + |y| sensor, two-mass");
 }
 
@@ -748,9 +748,8 @@ TEST(GapPairTest, ADeadZoneBehindAnAbsoluteValueSensorOnAFourthOrderRigIsFoundFr
   // actuator offset have bent to make up for the fold; the |y| variant of the pair started from
   // those wandered off, and sensor map + friction was named at 14 times the floor. The |y|
   // variant is also started from G0 as given, with no actuator offset.
-  const std::vector<EffectKind> truth = BenchCaseTruth(38, 1.0, true);
-  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kDeadZone, EffectKind::kSensorNonlinearity}));
-  const GapCase c = OffsetBenchCase(971, 38, truth, false, "levels", "two-mass");
+  const GapCase c = AnyPairCase(38, {EffectKind::kDeadZone, EffectKind::kSensorNonlinearity}, 971, "levels",
+                                false, "two-mass");
   const GapVerdict v = DiagnoseTheTruthAtTheFloor(c, "dead zone + |y| sensor, two-mass");
   ExpectParameterNear(v, EffectKind::kDeadZone, 0, c.effects[0].params[0], 0.03);
 }
@@ -761,9 +760,8 @@ TEST(GapPairTest, ADelayRivalledByADampedModeIsStillPairedWithTheLimit) {
   // the delay (a Padé-like stand-in); its pair with the limit reached the floor first and the
   // search stopped, naming resonance + limit. The delay, a near rival, has its pair searched too,
   // and with one parameter fewer it has the lower validation BIC.
-  const std::vector<EffectKind> truth = BenchCaseTruth(2, 1.0, true);
-  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kTimeDelay, EffectKind::kInputSaturation}));
-  const GapCase c = OffsetBenchCase(978, 2, truth, false, "levels", "", 0, 0.05);
+  const GapCase c = AnyPairCase(2, {EffectKind::kTimeDelay, EffectKind::kInputSaturation}, 978, "levels",
+                                false, "", 0.05);
   const GapVerdict v = DiagnoseTheTruthAtTheFloor(c, "delay + limit, Ts 0.05 s");
   ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.02);
 }
@@ -774,9 +772,8 @@ TEST(GapPairTest, ASecondEffectUnderALooseFloorIsSearchedWhenTheResidualFollowsT
   // noise there, the dead zone alone (at twice the noise variance) sat within it, and the cubic
   // spring was never searched for. What the dead zone leaves still follows the input, so the
   // pair is searched.
-  const std::vector<EffectKind> truth = BenchCaseTruth(36, 1.0, true);
-  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kDeadZone, EffectKind::kCubicStiffness}));
-  const GapCase c = OffsetBenchCase(978, 36, truth, false, "levels", "", 0, 0.05);
+  const GapCase c = AnyPairCase(36, {EffectKind::kDeadZone, EffectKind::kCubicStiffness}, 978, "levels",
+                                false, "", 0.05);
   const GapVerdict v = DiagnoseTheTruthAtTheFloor(c, "dead zone + cubic spring, Ts 0.05 s");
   ExpectParameterNear(v, EffectKind::kDeadZone, 0, c.effects[0].params[0], 0.02);
   ExpectParameterNear(v, EffectKind::kCubicStiffness, 0, c.effects[1].params[0], 0.05);
