@@ -57,10 +57,9 @@ Eigen::MatrixXd FreeResponse(const StateSpace& d, long n) {
 // the delay-free realisation `undelayed` (SampledUndelayed) the caller already has.
 Eigen::VectorXd PreRecordResponse(const TransferFunction& plant, const StateSpace& undelayed, double ts, long n,
                                   bool rounded) {
-  const double samples = plant.delay_s / ts;
-  if (n <= 0 || !((rounded ? std::round(samples) : std::floor(samples + 1e-12)) >= 1)) return Eigen::VectorXd();
+  if (n <= 0 || !HasDelayLine(plant.delay_s, ts, rounded)) return Eigen::VectorXd();
   const StateSpace d = rounded ? undelayed : DiscretizeZoh(ToStateSpace(plant), ts);
-  const long whole = rounded ? std::lround(samples) : std::lround(d.delay_s / ts);
+  const long whole = std::lround((rounded ? plant.delay_s : d.delay_s) / ts);
   if (whole <= 0) return Eigen::VectorXd();
   Eigen::VectorXd out(n), x = Eigen::VectorXd::Zero(d.A.rows());
   x.tail(d.A.rows() - undelayed.A.rows()).setOnes();  // a fractional delay's state: the previous input, c too

@@ -100,10 +100,11 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
     for (const auto& fixed_first : firsts)
     for (const auto& fixed : variants) {
       CandidateSpec spec = SpecFor(ctx, {k1, k2}, {fixed_first, fixed});
+      const bool other_variant = fixed_first != first.spec.fixed.front();
       // The prefix: the first's fit (θ, du, φ_1); du where the first had none starts at 0; the
       // first's other variant keeps θ and du (|y| has no parameters of its own).
       Eigen::VectorXd prefix = first.x;
-      if (fixed_first != first.spec.fixed.front()) {
+      if (other_variant) {
         const Candidate probe(*ctx.g0, spec, ctx.scales, 1);
         prefix = first.x.head(probe.BlockStart(0));
       } else if (spec.input_offset && !first.spec.input_offset) {
@@ -146,7 +147,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
       // lacks (`--pairs any --seed 971 --plants two-mass` case 38: a dead zone behind |y|, from
       // those the pair fit wandered off; from G0 it finds the dead zone at the floor).
       std::vector<Eigen::VectorXd> prefixes = {prefix, from_g0};
-      if (fixed_first != first.spec.fixed.front()) prefixes.push_back(Eigen::VectorXd::Zero(prefix.size()));
+      if (other_variant) prefixes.push_back(Eigen::VectorXd::Zero(prefix.size()));
       const auto points = BestStartPoints(pair_ctx, spec, prefixes, starts, 3);
       CandidateWork trial;
       FitSpecFrom(pair_ctx, spec, points, trial);

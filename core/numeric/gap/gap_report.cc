@@ -734,8 +734,8 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
       // prewhitened test G0's residual had): the floor is an upper bound, and a one-step ARX
       // predictor leaves it loose on a nonlinear rig sampled coarsely (σ̂/σ 1.6–2.2 at Ts 0.05 s:
       // a dead zone alone at twice the noise variance hid its cubic spring under it).
-      std::string input_note;
       if (searched == 0 && within_floor(w.fit.validation_mse)) {
+        std::string input_note;
         if (ResidualFollowsInput(validation, ctx.y_val - w.y_val, &input_note)) {
           report.notes.push_back(std::string("second effect after ") + EffectName(w.fit.effects.front().kind) +
                                  ": searched though its validation MSE is within the noise floor, since what it "
@@ -908,7 +908,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
     if (e.kind == EffectKind::kTimeDelay && !e.params.empty()) delay += e.params[0];
     feedback = feedback || IsFeedbackEffect(e.kind);
   }
-  if ((feedback ? std::round(delay / ts) : std::floor(delay / ts + 1e-12)) >= 1)
+  if (HasDelayLine(delay, ts, feedback))
     v.nuisance.initial_state += "; the model's delay line also holds a free input level at the start of each record";
 
   report.where = LocateGap(g0, validation, floor.sigma);
