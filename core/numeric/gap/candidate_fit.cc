@@ -407,9 +407,10 @@ void ApplyOutputMaps(const std::vector<Effect>& maps, Eigen::VectorXd& z, Eigen:
 }  // namespace
 
 Eigen::VectorXd Candidate::Simulate(const Eigen::VectorXd& x, const GapRecord& record,
-                                    std::vector<Effect>* output_maps) const {
+                                    std::vector<Effect>* output_maps, double play_state) const {
   EffectSimulationOptions options;
   options.substeps = substeps_;
+  options.play_state = play_state;
   std::vector<Effect> effects = Effects(x);
   // Quantisation is applied in Predict, after the nuisance (see there); so are the output maps
   // when the caller takes them (they then act on the free response as well).
@@ -554,6 +555,73 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
 
 }  // namespace
 
+// A rig's backlash keeps its play where the last motion before the record left it: anywhere in
+// the band around the command it then held, and after the first sample in the band
+// [v0 − r, v0 + r] around the play's first input v0 (the command with its offset, through the
+// input maps before the backlash). From rest at the origin (play_state 0) is right only for a rig
+// started for the record; one held at its operating point has taken up the play on one side
+// (`--pairs any --integrating --seed 980` case 4: the bench's rig warmed up at zero command, its
+// play at du + r; from 0 the first level drove the integrator by 0.2 too little until the first
+// reversal, and r fitted 0.04 for 0.16 with the record's start left above the floor). Five
+// points across the band, a parabola's vertex about the best, and the origin's own play (clamped
+// into the band); the best on the record's samples is kept, like the free initial state — a
+// nuisance per record, counted in NuisanceColumns.
+std::vector<double> Candidate::PlayStates(const Eigen::VectorXd& x, const GapRecord& record) const {
+  const std::vector<Effect> effects = Effects(x);
+  const auto it = std::find_if(effects.begin(), effects.end(), [](const Effect& e) { return e.kind == EffectKind::kBacklash; });
+  if (it == effects.end() || record.u.size() == 0) return {};
+  const double du = InputOffset(x), r = it->params[0];
+  const auto play_input = [&](long k) {  // what the play sees at sample k
+    double v = record.u(k) + du;
+    for (auto e = effects.begin(); e != it; ++e) {
+      if (e->kind == EffectKind::kInputSaturation) v = std::clamp(v, e->params[0], e->params[1]);
+      if (e->kind == EffectKind::kDeadZone) v = DeadZone(v, e->params[0]);
+    }
+    return v;
+  };
+  // Once the input has spanned more than the play (2r) every start has been taken up the same
+  // way: where it began matters before that sample only. By the second sample: not at all.
+  const double v0 = play_input(0);
+  if (record.u.size() > 1 && std::abs(play_input(1) - v0) > 2 * r) return {};
+  return {std::clamp(0.0, v0 - r, v0 + r), v0 - r, v0 - 0.5 * r, v0, v0 + 0.5 * r, v0 + r};
+}
+
+Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& record,
+                                   Nuisance* nuisance) const {
+  const std::vector<double> plays = PlayStates(x, record);
+  if (plays.empty()) return PredictFrom(x, record, nuisance, 0.0);
+  Eigen::VectorXd best;
+  double best_sse = INFINITY, chosen = plays.front();
+  std::vector<double> sse(plays.size());
+  const auto consider = [&](double play) {
+    Eigen::VectorXd y = PredictFrom(x, record, nullptr, play);
+    const long n = record.y.size() - record.score_from;
+    const double e = (record.y.tail(n) - y.tail(n)).squaredNorm();
+    if (best.size() == 0 || e < best_sse || (std::isnan(best_sse) && !std::isnan(e)))
+      best_sse = e, best = std::move(y), chosen = play;
+    return e;
+  };
+  for (size_t i = 0; i < plays.size(); ++i) sse[i] = consider(plays[i]);
+  // Between the band's points (plays 1..5, equally spaced) the sum of squares is piecewise
+  // quadratic in the play: one parabola step through the best of them and its neighbours.
+  size_t at = 1;
+  for (size_t i = 2; i < plays.size(); ++i)
+    if (sse[i] < sse[at]) at = i;
+  const size_t mid = std::clamp<size_t>(at, 2, plays.size() - 2);
+  const double h = plays[mid + 1] - plays[mid];
+  const double curvature = sse[mid + 1] - 2 * sse[mid] + sse[mid - 1];
+  if (h > 0 && curvature > 0) {
+    const double vertex = plays[mid] - 0.5 * h * (sse[mid + 1] - sse[mid - 1]) / curvature;
+    consider(std::clamp(vertex, plays[mid - 1], plays[mid + 1]));
+  }
+  if (nuisance) {
+    best = PredictFrom(x, record, nuisance, chosen);
+    nuisance->play = true;
+    nuisance->play_state = chosen;
+  }
+  return best;
+}
+
 // Nuisance parameters by variable projection (Golub–Pereyra): the output offset and the free
 // initial state enter the prediction linearly, ŷ = ŷ_sim + b·1 + F(θ)·x0 on each segment
 // (F = the sampled plant's free response C A^k), so for given θ, φ they are the least-squares
@@ -561,11 +629,11 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
 // samples gets its own state (multiple shooting without continuity constraints). A candidate
 // with an output map has ŷ = map(ŷ_sim + F(θ)·x0) + b instead, fitted by Gauss–Newton
 // (OffsetAndStateThroughMaps): the segment's state is the plant's, before the sensor.
-Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& record,
-                                   Nuisance* nuisance) const {
+Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord& record, Nuisance* nuisance,
+                                       double play_state) const {
   std::vector<Effect> maps;
   if (nuisance) nuisance->output_level = Eigen::VectorXd::Zero(record.y.size());
-  Eigen::VectorXd y = Simulate(x, record, spec_.free_state ? &maps : nullptr);
+  Eigen::VectorXd y = Simulate(x, record, spec_.free_state ? &maps : nullptr, play_state);
   if (!y.allFinite()) return y;
   const auto segments = Segments(record, spec_.segment);
   const long longest = Longest(segments);
@@ -663,6 +731,7 @@ long Candidate::NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapR
                         sensor.cols() > 0 ? &sensor : nullptr);
       columns += rank;
     }
+    if (!PlayStates(x, record).empty()) ++columns;  // where the play was before the record
   }
   return columns;
 }

@@ -286,8 +286,9 @@ EffectSimulator::EffectSimulator(const TransferFunction& plant, const Effect& ef
 
 EffectSimulator::EffectSimulator(const TransferFunction& plant, const std::vector<Effect>& effects,
                                  double sample_time, const EffectSimulationOptions& options)
-    : effects_(effects) {
+    : effects_(effects), play_state_(options.play_state) {
   Validate(plant);
+  if (!std::isfinite(play_state_)) Fail("effect simulation: the play state before the record is not finite");
   if (effects_.empty()) effects_.push_back(Effect{});
   for (const Effect& e : effects_) ValidateEffect(e);
   if (plant.IsDiscrete()) Fail("effect simulation needs a continuous plant");
@@ -366,7 +367,7 @@ void EffectSimulator::Reset() {
   next_ = Eigen::VectorXd::Zero(A_.rows());
   delay_line_.assign(delay_, 0.0);
   delay_head_ = 0;
-  backlash_.assign(effects_.size(), 0.0);
+  backlash_.assign(effects_.size(), play_state_);
 }
 
 // Coulomb friction as a set-valued force (Filippov; Karnopp's discrete stick rule): the force

@@ -92,6 +92,9 @@ ForcePath SplitAtForce(const TransferFunction& plant);
 
 struct EffectSimulationOptions {
   int substeps = 4;  // ZOH sub-steps per sample for the feedback effects
+  // The backlash's (play operator's) output before the first sample: where the play was left
+  // before the record. 0 = from rest at the origin.
+  double play_state = 0.0;
 };
 
 // Sample-by-sample simulation of the plant with the effect (the rig simulator's core): Step(u_k)
@@ -129,6 +132,7 @@ class EffectSimulator {
   std::vector<double> delay_line_;
   long delay_head_ = 0;
   std::vector<double> backlash_;  // play-operator state per effect (used by backlash)
+  double play_state_ = 0.0;       // backlash_ before the first sample (EffectSimulationOptions)
 };
 
 // Output of the plant with the effect for input samples u (Ts apart, plant at rest at k = 0).

@@ -60,6 +60,9 @@ struct Nuisance {
   // sensor steps add (the first segment's coefficients) — for putting measured outputs into the
   // plant's coordinates.
   Eigen::VectorXd output_level;
+  // With a backlash: the play's output before the record, as chosen (Candidate::PlayStates).
+  bool play = false;
+  double play_state = 0;
 };
 
 // One candidate: x = [θ (plant log multipliers) | du | φ_1 | φ_2].
@@ -98,9 +101,11 @@ class Candidate {
   Eigen::VectorXd Phi(size_t i, const std::vector<double>& p) const;
   // The plant with its effects and input offset, from rest (no output nuisance). With
   // `output_maps`, the output saturation and sensor map are left out and returned there.
+  // `play_state`: the backlash's output before the record (EffectSimulationOptions).
   Eigen::VectorXd Simulate(const Eigen::VectorXd& x, const GapRecord& record,
-                           std::vector<Effect>* output_maps = nullptr) const;
-  // Simulate + the output offset and free initial state(s) fitted by least squares.
+                           std::vector<Effect>* output_maps = nullptr, double play_state = 0.0) const;
+  // Simulate + the output offset and free initial state(s) fitted by least squares; with a
+  // backlash, also where its play was left before the record (PlayStates: the best of a grid).
   Eigen::VectorXd Predict(const Eigen::VectorXd& x, const GapRecord& record,
                           Nuisance* nuisance = nullptr) const;
   // How many nuisance columns Predict fits on these records: per record and segment the rank of
@@ -111,8 +116,14 @@ class Candidate {
   // The plant with the linear effects (lag, resonance, delay) folded in: what the free
   // response of the nuisance comes from.
   TransferFunction LinearPart(const Eigen::VectorXd& x) const;
+  // With a backlash: the play's outputs before the record that Predict chooses from, across the
+  // band [v0 − r, v0 + r] around the play's first input v0 (its state after the first sample is
+  // in that band whatever it was before); empty without a backlash.
+  std::vector<double> PlayStates(const Eigen::VectorXd& x, const GapRecord& record) const;
 
  private:
+  Eigen::VectorXd PredictFrom(const Eigen::VectorXd& x, const GapRecord& record, Nuisance* nuisance,
+                              double play_state) const;
   TransferFunction base_;
   CandidateSpec spec_;
   Scales scales_;

@@ -910,6 +910,9 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
   }
   if (HasDelayLine(delay, ts, feedback))
     v.nuisance.initial_state += "; the model's delay line also holds a free input level at the start of each record";
+  if (std::any_of(v.effects.begin(), v.effects.end(), [](const Effect& e) { return e.kind == EffectKind::kBacklash; }))
+    v.nuisance.initial_state += "; the backlash's play starts where it was left before each record (the best of a "
+                                "grid across its band around the first command, Candidate::PlayStates)";
 
   report.where = LocateGap(g0, validation, floor.sigma);
   report.where.noise_nrmse = noise_nrmse;

@@ -46,6 +46,23 @@ TEST(EffectsTest, BacklashIsThePlayOperator) {
   EXPECT_TRUE(Backlash(u, 0.2).isApprox(expected, 1e-12)) << Backlash(u, 0.2).transpose();
 }
 
+TEST(EffectsTest, BacklashStartsWherePlayWasLeftBeforeTheRecord) {
+  // The play at 0.65 before the record, r = 0.2, by hand: 0.65 stays inside [0.3, 0.7] and
+  // [0.4, 0.8], is pushed down to 0.5 by u = 0.3, then up to 0.8 by u = 1.0. From rest (0) the
+  // first sample would have taken it to 0.3 instead.
+  Eigen::VectorXd u(4);
+  u << 0.5, 0.6, 0.3, 1.0;
+  Eigen::VectorXd played(4);
+  played << 0.65, 0.65, 0.5, 0.8;
+  EffectSimulationOptions options;
+  options.play_state = 0.65;
+  const Eigen::VectorXd y = SimulateWithEffect(FirstOrder(1.0, 3.0), {EffectKind::kBacklash, {0.2}}, u, 0.1, options);
+  EXPECT_TRUE(y.isApprox(SimulateWithEffect(FirstOrder(1.0, 3.0), {}, played, 0.1), 1e-12)) << y.transpose();
+  options.play_state = NAN;
+  EXPECT_THROW(SimulateWithEffect(FirstOrder(1.0, 3.0), {EffectKind::kBacklash, {0.2}}, u, 0.1, options),
+               std::invalid_argument);
+}
+
 TEST(EffectsTest, ActuatorLagMatchesTheClosedFormStepResponse) {
   // 1/((s + 1)(T s + 1)) to a unit step: 1 − (e^(−t) − T e^(−t/T))/(1 − T); ZOH exact at samples.
   const double lag = 0.3, ts = 0.05;

@@ -353,6 +353,28 @@ TEST(GapIntegratingTest, AnAbsoluteValueSensorKeepsItsFoldUnderMultipleShooting)
   EXPECT_EQ(report.verdict.effects.size(), 1u);
 }
 
+TEST(GapIntegratingTest, ABacklashIsFittedFromWhereItsPlayWasBeforeTheRecord) {
+  // `idrig gap bench --cases 54 --seed 980 --combos 1 --pairs any --integrating --offsets
+  // --excitation levels`, case 4, with the backlash alone: the bench's rig warmed up at zero
+  // command, which left the play at du + r, 0.20 from where a play started at rest would sit after
+  // the first sample. On an integrator that difference drove the first level's ramp until the
+  // first reversal: r fitted 0.04 for 0.16, the record's start above the floor, and the verdict
+  // was a higher linear order. Where the play was is now a nuisance per record.
+  const GapCase c = OffsetBenchCase(980, 4, {EffectKind::kBacklash}, true, "levels");
+  const double r = c.effect.params.at(0);
+  ASSERT_GT(std::abs(c.input_offset), r);  // the warm-up took up the play on one side
+  const GapReport report = DiagnoseOnOneThread(c);
+  const GapVerdict& v = report.verdict;
+  std::printf("backlash on an integrator, play left before the record: verdict %s (%zu), r %.4f (truth %.4f), "
+              "NRMSE %.4f, floor %.4f\n",
+              v.effect.c_str(), v.effects.size(), v.effects.empty() ? NAN : v.effects[0].params[0], r,
+              v.nrmse_after, v.noise_nrmse);
+  EXPECT_EQ(v.effect, "backlash");
+  ASSERT_EQ(v.effects.size(), 1u);
+  EXPECT_NEAR(v.effects[0].params[0], r, 0.15 * r);
+  EXPECT_LT(v.nrmse_after, 1.02 * v.noise_nrmse);
+}
+
 TEST(GapIntegratingTest, AnAbsoluteValueSensorFoldsWhereTheSegmentsLevelPutsIt) {
   // `idrig gap bench --cases 14 --seed 46 --offsets --integrating --combos 1 --excitation
   // levels`, case 3: a |y| sensor and a 0.071 s delay on an integrating plant, a sensor offset of
