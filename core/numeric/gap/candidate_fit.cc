@@ -411,7 +411,7 @@ Eigen::VectorXd Candidate::Simulate(const Eigen::VectorXd& x, const GapRecord& r
   EffectSimulationOptions options;
   options.substeps = substeps_;
   options.play_state = play_state;
-  std::vector<Effect> effects = Effects(x);
+  std::vector<Effect> effects = InRigOrder(Effects(x));
   // Quantisation is applied in Predict, after the nuisance (see there); so are the output maps
   // when the caller takes them (they then act on the free response as well).
   effects.erase(std::remove_if(effects.begin(), effects.end(),
@@ -567,7 +567,7 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
 // into the band); the best on the record's samples is kept, like the free initial state — a
 // nuisance per record, counted in NuisanceColumns.
 std::vector<double> Candidate::PlayStates(const Eigen::VectorXd& x, const GapRecord& record) const {
-  const std::vector<Effect> effects = Effects(x);
+  const std::vector<Effect> effects = InRigOrder(Effects(x));  // as Simulate takes them
   const auto it = std::find_if(effects.begin(), effects.end(), [](const Effect& e) { return e.kind == EffectKind::kBacklash; });
   if (it == effects.end() || record.u.size() == 0) return {};
   const double du = InputOffset(x), r = it->params[0];
@@ -877,10 +877,15 @@ CandidateSpec SpecFor(const FitContext& ctx, std::vector<EffectKind> kinds,
   // Coulomb friction sees it: where the record starts stuck, du decides how far the drive
   // must move before the axis breaks away. Quantisation does not: its lattice is placed in
   // the measured coordinates (Predict).
+  // Nor does a backlash: the play operator commutes with a shift (B(u + c) = B(u) + c, its
+  // play shifted too), and where its play was before the record is a nuisance of its own
+  // (PlayStates), so beside a backlash alone du is an output offset again (fitted, it wandered
+  // off on `--pairs any --plants two-mass --seed 971` case 28 — the play's first input at 1.4
+  // for −0.05 — and the input limit searched as the second effect had its limits against that).
   bool nonlinear = false;
   for (EffectKind k : spec.kinds)
     if (k != EffectKind::kNone && k != EffectKind::kParameterMismatch && !IsLinearEffect(k) &&
-        k != EffectKind::kOutputQuantization)
+        k != EffectKind::kOutputQuantization && k != EffectKind::kBacklash)
       nonlinear = true;
   spec.input_offset = ctx.integrating || nonlinear;
   return spec;

@@ -184,6 +184,19 @@ bool IsInputMap(EffectKind kind) {
   return kind == EffectKind::kInputSaturation || kind == EffectKind::kDeadZone || kind == EffectKind::kBacklash;
 }
 
+std::vector<Effect> InRigOrder(std::vector<Effect> effects) {
+  const auto rank = [](const Effect& e) {
+    switch (e.kind) {
+      case EffectKind::kInputSaturation: return 0;
+      case EffectKind::kDeadZone: return 1;
+      case EffectKind::kBacklash: return 2;
+      default: return 3;
+    }
+  };
+  std::stable_sort(effects.begin(), effects.end(), [&](const Effect& a, const Effect& b) { return rank(a) < rank(b); });
+  return effects;
+}
+
 void ValidateEffect(const Effect& effect) {
   const auto& names = EffectParameterNames(effect.kind);
   const std::string what = std::string("effect ") + EffectName(effect.kind);

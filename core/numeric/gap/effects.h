@@ -68,6 +68,12 @@ struct Effect {
   std::vector<double> params;  // EffectParameterNames(kind) order
 };
 
+// The effects with their input maps in a rig's order — the amplifier's limit, then the dead zone
+// (a valve's overlap, a motor's breakaway), then the gears' play — and the rest as given. The
+// simulator applies input maps in the order given; a diagnosis that found them in another order
+// models them in this one (a limit on the play's input is not a limit on its output).
+std::vector<Effect> InRigOrder(std::vector<Effect> effects);
+
 // The sensor map's |y| variant (absolute = 1): it folds the output at zero.
 bool IsAbsoluteSensor(const Effect& e);
 

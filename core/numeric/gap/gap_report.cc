@@ -727,6 +727,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
     double first_single_bic = 0;
     // Kass and Raftery's "very strong" evidence: a BIC difference above 10.
     constexpr double kRivalBic = 10.0;
+    constexpr double kFarAboveFloor = 1.5;
     std::vector<EffectKind> searched_kinds;
     for (const CandidateWork& w : work) {
       if (!w.fit.eligible || w.fit.effects.empty()) continue;
@@ -758,7 +759,14 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
       // ahead of the delay and its pair reached the floor first (`--pairs any --seed 978 --ts
       // 0.05` case 2, `--seed 973 --excitation noise` case 2); the lowest validation BIC decides.
       const bool rival = searched == 1 && w.fit.bic - first_single_bic < kRivalBic;
-      if (searched > 0 && (!floor_known || searched == 3 ||
+      // Three firsts; two more while the best so far leaves the validation records far above the
+      // floor (kFarAboveFloor times its variance): the effect a pair needs first can rank low
+      // alone (`--pairs any --integrating --seed 980` case 28: an input limit beside a backlash of
+      // r 0.3, the backlash alone fifth and the limit not eligible, the third first's pair at 2.3
+      // times the floor; backlash first, the limit is its second at the floor).
+      const double best_mse = best.kept ? best.pair.fit.validation_mse : top.validation_mse;
+      const bool far = floor_known && best_mse > kFarAboveFloor * floor.sigma * floor.sigma;
+      if (searched > 0 && (!floor_known || searched == 5 || (searched == 3 && !far) ||
                            (best.kept && within_floor(best.pair.fit.validation_mse) && !rival)))
         break;
       if (searched == 0) first_single_bic = w.fit.bic;
@@ -948,7 +956,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const auto diagnosed = [&](const GapRecord& r) {
     EffectSimulationOptions sim;
     sim.substeps = options.substeps;
-    return SimulateWithEffects(v.plant, v.effects, Eigen::VectorXd(r.u.array() + du), r.sample_time, sim);
+    return SimulateWithEffects(v.plant, InRigOrder(v.effects), Eigen::VectorXd(r.u.array() + du), r.sample_time, sim);
   };
   GapReport marks;
   const std::string name = "the diagnosed model's output (" + v.effect + ")";

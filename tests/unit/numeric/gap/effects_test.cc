@@ -63,6 +63,30 @@ TEST(EffectsTest, BacklashStartsWherePlayWasLeftBeforeTheRecord) {
                std::invalid_argument);
 }
 
+TEST(EffectsTest, InputMapsInARigsOrderLimitThenDeadZoneThenPlay) {
+  const std::vector<Effect> found = {{EffectKind::kBacklash, {0.1}},
+                                     {EffectKind::kSensorNonlinearity, {1, 0, 0, 1}},
+                                     {EffectKind::kTimeDelay, {0.02}},
+                                     {EffectKind::kInputSaturation, {-1, 1}},
+                                     {EffectKind::kDeadZone, {0.2}}};
+  std::vector<EffectKind> kinds;
+  for (const Effect& e : InRigOrder(found)) kinds.push_back(e.kind);
+  EXPECT_EQ(kinds, (std::vector<EffectKind>{EffectKind::kInputSaturation, EffectKind::kDeadZone,
+                                            EffectKind::kBacklash, EffectKind::kSensorNonlinearity,
+                                            EffectKind::kTimeDelay}));
+  // The order matters: a limit before the play keeps the play's input inside it, so the play
+  // turns back at once when the command does; after the play it clips what the play gives.
+  Eigen::VectorXd u(3);
+  u << 0.0, 2.0, 0.5;
+  const Effect limit{EffectKind::kInputSaturation, {-1, 1}}, play{EffectKind::kBacklash, {0.3}};
+  const TransferFunction g = FirstOrder(1.0, 3.0);
+  Eigen::VectorXd limit_first(3), play_first(3);
+  limit_first << 0.0, 0.7, 0.7;  // play of clamp(u): 0, 1 − 0.3, then clamp(0.5) = 0.5 is within 0.3 of 0.7
+  play_first << 0.0, 1.0, 0.8;   // clamp of play(u): play 0, 1.7, 0.8
+  EXPECT_TRUE(SimulateWithEffects(g, {limit, play}, u, 0.1).isApprox(SimulateWithEffect(g, {}, limit_first, 0.1), 1e-12));
+  EXPECT_TRUE(SimulateWithEffects(g, {play, limit}, u, 0.1).isApprox(SimulateWithEffect(g, {}, play_first, 0.1), 1e-12));
+}
+
 TEST(EffectsTest, ActuatorLagMatchesTheClosedFormStepResponse) {
   // 1/((s + 1)(T s + 1)) to a unit step: 1 − (e^(−t) − T e^(−t/T))/(1 − T); ZOH exact at samples.
   const double lag = 0.3, ts = 0.05;

@@ -812,6 +812,29 @@ TEST(GapPairTest, TwoTiedSinglesAboveTheFloorAreSettledByTheirPair) {
   ExpectParameterNear(v, EffectKind::kCubicStiffness, 0, c.effects[1].params[0], 0.05);
 }
 
+TEST(GapIntegratingTest, APairWhoseFirstEffectRanksLowAloneIsSearchedWhileTheBestIsFarAboveTheFloor) {
+  // `--pairs any --integrating --seed 980`, case 28: an input limit beside a backlash of r 0.30.
+  // Alone the backlash ranked fifth (its validation worse than a refit: the limit it lacks) and
+  // the limit was not eligible; the pairs of the three firsts left 2.3 times the floor's variance
+  // and |y| was named. While the best is that far above the floor, two more firsts are searched:
+  // backlash first, the limit is its second at the floor.
+  const GapCase c = AnyPairCase(28, {EffectKind::kInputSaturation, EffectKind::kBacklash}, 980, "levels", true);
+  const GapVerdict v = DiagnoseTheTruthAtTheFloor(c, "input limit + backlash on an integrator");
+  ExpectParameterNear(v, EffectKind::kBacklash, 0, c.effects[1].params[0], 0.05);
+}
+
+TEST(GapPairTest, AnInputLimitBeforeABacklashIsFoundBesideAFreePlay) {
+  // `--pairs any --plants two-mass --seed 971`, case 28: an input limit before a backlash of
+  // r 0.17. Named whole before the play became a nuisance; with the play free (PlayStates) the
+  // backlash alone no longer pinned the actuator offset, which wandered off, and the limit
+  // searched beside it was fitted against that offset (backlash + cubic spring named). Beside a
+  // backlash alone du is now not fitted on a stable plant, and the limit acts before the play.
+  const GapCase c = AnyPairCase(28, {EffectKind::kInputSaturation, EffectKind::kBacklash}, 971, "levels", false,
+                                "two-mass");
+  const GapVerdict v = DiagnoseTheTruthAtTheFloor(c, "input limit + backlash, two masses");
+  ExpectParameterNear(v, EffectKind::kBacklash, 0, c.effects[1].params[0], 0.03);
+}
+
 TEST(GapIntegratingTest, AQuantiserCrossingALevelIsNotASensorStep) {
   // `--seed 972 --integrating`, case 50: a quantiser of step 0.81 (noise 0.06) with a weak cubic
   // spring, on a position that moves slowly. Each crossing of a level is a sharp jump that lasts,
