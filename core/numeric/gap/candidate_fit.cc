@@ -614,11 +614,7 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
     const double vertex = plays[mid] - 0.5 * h * (sse[mid + 1] - sse[mid - 1]) / curvature;
     consider(std::clamp(vertex, plays[mid - 1], plays[mid + 1]));
   }
-  if (nuisance) {
-    best = PredictFrom(x, record, nuisance, chosen);
-    nuisance->play = true;
-    nuisance->play_state = chosen;
-  }
+  if (nuisance) best = PredictFrom(x, record, nuisance, chosen);
   return best;
 }
 

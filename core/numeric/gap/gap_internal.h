@@ -60,9 +60,6 @@ struct Nuisance {
   // sensor steps add (the first segment's coefficients) — for putting measured outputs into the
   // plant's coordinates.
   Eigen::VectorXd output_level;
-  // With a backlash: the play's output before the record, as chosen (Candidate::PlayStates).
-  bool play = false;
-  double play_state = 0;
 };
 
 // One candidate: x = [θ (plant log multipliers) | du | φ_1 | φ_2].
