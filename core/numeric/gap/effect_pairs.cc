@@ -37,19 +37,30 @@ bool Compatible(EffectKind a, EffectKind b) {
 
 // The second effect's tests, `two` (a pair) against `one` (its first effect alone): the LR on
 // the estimation records (the extra nuisance columns counted as parameters) with its threshold
-// at the Bonferroni-corrected level, and the signature on validation (the pair's change over
-// `one` against what `one` leaves).
+// at the Bonferroni-corrected level, and on validation the signature (the pair's change over
+// `one` against what `one` leaves) or, where the second effect is small against the noise, a
+// significant validation gain over `one` (Diebold–Mariano z, as for a single effect at the plain
+// level: a confirmation, on records it was not fitted to, of the LR test passed at the
+// Bonferroni-corrected level). `two.fit.validation_mse` must be set.
 struct SecondEffectTest {
-  double lr = 0, threshold = 0, signature = 0;
+  double lr = 0, threshold = 0, signature = 0, gain_z = 0, gain_threshold = 0;
+  bool Passes(const GapOptions& options) const {
+    return lr > threshold && (signature >= options.min_signature || gain_z > gain_threshold);
+  }
 };
 SecondEffectTest TestSecondEffect(const FitContext& ctx, const CandidateWork& one, const CandidateWork& two) {
   const CandidateFit &a = one.fit, &b = two.fit;
   const int dof = std::max(1, b.parameters - a.parameters +
                                   static_cast<int>(std::max<long>(0, b.nuisance_estimation - a.nuisance_estimation)));
   SecondEffectTest t;
+  const double level = ctx.options->significance / ctx.k_effects;
   t.lr = ctx.n_est * std::log(a.estimation_mse / std::max(b.estimation_mse, 1e-300));
-  t.threshold = ChiSquareQuantile(1 - ctx.options->significance / ctx.k_effects, dof);
+  t.threshold = ChiSquareQuantile(1 - level, dof);
   t.signature = Correlation(two.y_val - one.y_val, ctx.y_val - one.y_val);
+  const long extra = std::max<long>(0, b.nuisance_validation - a.nuisance_validation);
+  t.gain_z = ValidationGainZ(ctx.y_val, one.y_val, two.y_val,
+                             extra * b.validation_mse / std::max<long>(1, ctx.n_val - b.nuisance_validation));
+  t.gain_threshold = NormalUpperQuantile(ctx.options->significance);
   return t;
 }
 
@@ -166,14 +177,16 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
     CandidateFit& c = w.fit;
     if (c.effects.size() < 2) return;
     CountNuisance(ctx, w);
+    c.validation_mse = ValidationMse(ctx, w.y_val);
+    c.nrmse_after = Nrmse(ctx.y_val, w.y_val)(0);
+    c.bic = ValidationBic(ctx.n_val, ctx.n_est, c.validation_mse, c.parameters, c.nuisance_validation);
     const SecondEffectTest test = TestSecondEffect(ctx, first, w);
     c.likelihood_ratio = test.lr;
     c.lr_threshold = test.threshold;
     c.significant = c.likelihood_ratio > c.lr_threshold;
-    c.validation_mse = ValidationMse(ctx, w.y_val);
-    c.nrmse_after = Nrmse(ctx.y_val, w.y_val)(0);
-    c.bic = ValidationBic(ctx.n_val, ctx.n_est, c.validation_mse, c.parameters, c.nuisance_validation);
     c.signature = test.signature;
+    c.validation_gain_z = test.gain_z;
+    w.gain_significant = test.gain_z > test.gain_threshold;
   };
   for (CandidateWork& w : pairs) score(w);
   // The input-residual test is linear: after a map that folds or bends the output (|y|, a clip)
@@ -186,8 +199,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   if (!input_note.empty()) {  // set only when the resonance was among the seconds and taken out
     const CandidateWork* dynamic = nullptr;
     for (const CandidateWork& w : pairs)
-      if (w.fit.effects.size() == 2 && IsLinearEffect(w.fit.effects[1].kind) && w.fit.significant &&
-          w.fit.signature >= ctx.options->min_signature)
+      if (w.fit.effects.size() == 2 && IsLinearEffect(w.fit.effects[1].kind) && EffectEligible(*ctx.options, w))
         dynamic = &w;
     if (dynamic) {
       resonance_late = EffectName(dynamic->fit.effects[1].kind);
@@ -201,7 +213,7 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   for (CandidateWork& w : pairs) {
     CandidateFit& c = w.fit;
     if (c.effects.size() < 2) continue;
-    c.eligible = c.significant && c.signature >= options.min_signature && !w.masked;
+    c.eligible = EffectEligible(options, w);
     if (c.eligible && c.bic < std::min(one.bic, top_bic) - options.ambiguity_bic) passing.push_back(&w);
   }
   // The lowest validation BIC; but a pair with fewer parameters whose validation residuals are
@@ -233,9 +245,9 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
     const CandidateFit& c = w.fit;
     if (!tried.empty()) tried += "; ";
     char line[200];
-    std::snprintf(line, sizeof line, "%s: LR %.1f (threshold %.1f), signature %.2f, ΔBIC %.1f",
+    std::snprintf(line, sizeof line, "%s: LR %.1f (threshold %.1f), signature %.2f, gain z %.1f, ΔBIC %.1f",
                   EffectName(c.effects.size() > 1 ? c.effects[1].kind : EffectKind::kNone),
-                  c.likelihood_ratio, c.lr_threshold, c.signature, c.bic - one.bic);
+                  c.likelihood_ratio, c.lr_threshold, c.signature, c.validation_gain_z, c.bic - one.bic);
     tried += line;
   }
   out.note = std::string("second effect after ") + EffectName(k1) + ": " +
@@ -294,12 +306,12 @@ bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWo
   // the forward search's rules, against the main one as refitted from the pair.
   const EffectKind main = pair.spec.kinds[1], lesser = pair.spec.kinds[0];
   const SecondEffectTest test = TestSecondEffect(ctx, alone[1], pair);
-  if (alone[1].fit.eligible && !(test.lr > test.threshold && test.signature >= options.min_signature &&
-                                 pair.fit.bic < alone[1].fit.bic - options.ambiguity_bic)) {
+  if (alone[1].fit.eligible &&
+      !(test.Passes(options) && pair.fit.bic < alone[1].fit.bic - options.ambiguity_bic)) {
     single = alone[1];
     char why[200];
-    std::snprintf(why, sizeof why, " (LR %.1f, threshold %.1f; signature %.2f)", test.lr, test.threshold,
-                  test.signature);
+    std::snprintf(why, sizeof why, " (LR %.1f, threshold %.1f; signature %.2f, gain z %.1f)", test.lr,
+                  test.threshold, test.signature, test.gain_z);
     note += std::string(": ") + EffectName(main) + " is the main effect, and " + EffectName(lesser) +
             " does not pass as a second effect after it" + why + "; the pair is dropped";
     return true;
