@@ -822,6 +822,34 @@ TEST(GapIntegratingTest, APairWhoseFirstEffectRanksLowAloneIsSearchedWhileTheBes
   ExpectParameterNear(v, EffectKind::kBacklash, 0, c.effects[1].params[0], 0.05);
 }
 
+TEST(GapIntegratingTest, ASecondEffectSmallAgainstTheDriftIsKeptOnASignificantValidationGain) {
+  // `--pairs any --integrating --seed 980`, case 15: an actuator lag beside a cubic spring. The
+  // lag passed the LR test after the spring but correlated under the 0.2 share with what the
+  // spring left (the drift sets the residual's scale), and only the spring was named. A second
+  // effect now also passes on a significant validation gain over its first (Diebold–Mariano z
+  // at the plain level, as a single effect does), on records it was not fitted to.
+  const GapCase c = AnyPairCase(15, {EffectKind::kActuatorLag, EffectKind::kCubicStiffness}, 980, "levels", true);
+  const GapReport report = DiagnoseAndPrint(c, "lag + cubic spring on an integrator");
+  ExpectNamedAtTheFloor(report.verdict, {"actuator_lag", "cubic_stiffness"});
+  ExpectParameterNear(report.verdict, EffectKind::kActuatorLag, 0, c.effects[0].params[0], 0.25);
+  // The lag passed on its gain, not on its share: its line in the pair search's note.
+  std::string second;
+  for (const auto& n : report.notes)
+    if (n.rfind("second effect after cubic_stiffness", 0) == 0) second = n;
+  const size_t at = second.find("actuator_lag: LR");
+  ASSERT_NE(at, std::string::npos) << second;
+  double lr = 0, threshold = 0, signature = 0, gain_z = 0;
+  ASSERT_EQ(std::sscanf(second.c_str() + at, "actuator_lag: LR %lf (threshold %lf), signature %lf, gain z %lf", &lr,
+                        &threshold, &signature, &gain_z),
+            4)
+      << second;
+  std::printf("lag as the second: LR %.1f (threshold %.1f), signature %.2f, gain z %.2f\n", lr, threshold, signature,
+              gain_z);
+  EXPECT_GT(lr, threshold);
+  EXPECT_LT(signature, 0.2);
+  EXPECT_GT(gain_z, 2.33);  // the one-sided normal quantile at 1 %
+}
+
 TEST(GapPairTest, AnInputLimitBeforeABacklashIsFoundBesideAFreePlay) {
   // `--pairs any --plants two-mass --seed 971`, case 28: an input limit before a backlash of
   // r 0.17. Named whole before the play became a nuisance; with the play free (PlayStates) the
