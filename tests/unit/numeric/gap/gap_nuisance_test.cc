@@ -908,7 +908,7 @@ TEST(GapOffsetTest, ALimitTheValidationRecordsShowIsNotReleased) {
   EXPECT_LT(limit.nrmse_after, 1.05 * report.verdict.noise_nrmse);
 }
 
-TEST(GapOffsetTest, APairIsAlsoReachedFromItsOtherEffect) {
+TEST(GapOffsetTest, AFrictionThatRanksLowAloneIsSearchedAsAFirstBesideABentLimit) {
   // `idrig gap bench --cases 14 --seed 604 --offsets --combos 1 --plants zeros --excitation
   // levels`, case 7: Coulomb friction and an input saturation on a plant with a zero. Alone,
   // the saturation bends its limits to mimic the friction (both above the command's range),
