@@ -566,7 +566,8 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
 // points across the band, a parabola's vertex about the best, and the origin's own play (clamped
 // into the band); the best on the record's samples is kept, like the free initial state — a
 // nuisance per record, counted in NuisanceColumns.
-std::vector<double> Candidate::PlayStates(const Eigen::VectorXd& x, const GapRecord& record) const {
+std::vector<double> Candidate::PlayStates(const Eigen::VectorXd& x, const GapRecord& record,
+                                          long* taken_up) const {
   const std::vector<Effect> effects = InRigOrder(Effects(x));  // as Simulate takes them
   const auto it = std::find_if(effects.begin(), effects.end(), [](const Effect& e) { return e.kind == EffectKind::kBacklash; });
   if (it == effects.end() || record.u.size() == 0) return {};
@@ -581,22 +582,65 @@ std::vector<double> Candidate::PlayStates(const Eigen::VectorXd& x, const GapRec
   };
   // Once the input has spanned more than the play (2r) every start has been taken up the same
   // way: where it began matters before that sample only. By the second sample: not at all.
+  // (Every start lies in [v0 − r, v0 + r], and the play moves up only to follow v − r, down only
+  // to follow v + r: at the first v ≥ v0 + 2r, or ≤ v0 − 2r, all are at v ∓ r.)
   const double v0 = play_input(0);
   if (record.u.size() > 1 && std::abs(play_input(1) - v0) > 2 * r) return {};
+  if (taken_up) {
+    *taken_up = record.u.size();
+    for (long k = 1; k < record.u.size(); ++k)
+      if (std::abs(play_input(k) - v0) >= 2 * r) {
+        *taken_up = k;
+        break;
+      }
+  }
   return {std::clamp(0.0, v0 - r, v0 + r), v0 - r, v0 - 0.5 * r, v0, v0 + 0.5 * r, v0 + r};
 }
 
+namespace {
+// The first `length` samples of `record` (its sensor steps within them).
+GapRecord RecordHead(const GapRecord& record, long length) {
+  GapRecord head;
+  head.u = record.u.head(length);
+  head.y = record.y.head(length);
+  head.sample_time = record.sample_time;
+  head.score_from = record.score_from;
+  for (long k : record.sensor_steps)
+    if (k < length) head.sensor_steps.push_back(k);
+  return head;
+}
+}  // namespace
+
 Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& record,
                                    Nuisance* nuisance) const {
-  const std::vector<double> plays = PlayStates(x, record);
+  long taken_up = 0;
+  const std::vector<double> plays = PlayStates(x, record, &taken_up);
   if (plays.empty()) return PredictFrom(x, record, nuisance, 0.0);
+  // Under multiple shooting every segment has a free state, so the play's start shows in the
+  // segments up to the one where it is taken up (and beyond only through the nuisance they
+  // share): the start is chosen on those segments when they are at most half the record (then
+  // the chosen start is predicted on the whole record). 10^4 samples at 500 per segment under a
+  // slow input: six short predictions and one whole instead of seven whole.
+  const GapRecord* scored = &record;
+  GapRecord head;
+  if (spec_.segment > 0) {
+    long end = record.y.size();
+    for (const auto& segment : Segments(record, spec_.segment))
+      if (segment.first <= std::max<long>(taken_up, record.score_from) &&
+          std::max<long>(taken_up, record.score_from) < segment.first + segment.second)
+        end = segment.first + segment.second;
+    if (2 * end <= record.y.size()) {
+      head = RecordHead(record, end);
+      scored = &head;
+    }
+  }
   Eigen::VectorXd best;
   double best_sse = INFINITY, chosen = plays.front();
   std::vector<double> sse(plays.size());
   const auto consider = [&](double play) {
-    Eigen::VectorXd y = PredictFrom(x, record, nullptr, play);
-    const long n = record.y.size() - record.score_from;
-    const double e = (record.y.tail(n) - y.tail(n)).squaredNorm();
+    Eigen::VectorXd y = PredictFrom(x, *scored, nullptr, play);
+    const long n = scored->y.size() - scored->score_from;
+    const double e = (scored->y.tail(n) - y.tail(n)).squaredNorm();
     if (best.size() == 0 || e < best_sse || (std::isnan(best_sse) && !std::isnan(e)))
       best_sse = e, best = std::move(y), chosen = play;
     return e;
@@ -614,7 +658,7 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
     const double vertex = plays[mid] - 0.5 * h * (sse[mid + 1] - sse[mid - 1]) / curvature;
     consider(std::clamp(vertex, plays[mid - 1], plays[mid + 1]));
   }
-  if (nuisance) best = PredictFrom(x, record, nuisance, chosen);
+  if (nuisance || scored != &record) best = PredictFrom(x, record, nuisance, chosen);
   return best;
 }
 

@@ -115,8 +115,11 @@ class Candidate {
   TransferFunction LinearPart(const Eigen::VectorXd& x) const;
   // With a backlash: the play's outputs before the record that Predict chooses from, across the
   // band [v0 − r, v0 + r] around the play's first input v0 (its state after the first sample is
-  // in that band whatever it was before); empty without a backlash.
-  std::vector<double> PlayStates(const Eigen::VectorXd& x, const GapRecord& record) const;
+  // in that band whatever it was before); empty without a backlash. `taken_up`: a sample by
+  // which every start has been taken up the same way (the play's input has moved 2r from v0;
+  // the record's length if it never does).
+  std::vector<double> PlayStates(const Eigen::VectorXd& x, const GapRecord& record,
+                                 long* taken_up = nullptr) const;
 
  private:
   Eigen::VectorXd PredictFrom(const Eigen::VectorXd& x, const GapRecord& record, Nuisance* nuisance,
