@@ -63,6 +63,31 @@ TEST(EffectsTest, BacklashStartsWherePlayWasLeftBeforeTheRecord) {
                std::invalid_argument);
 }
 
+TEST(EffectsTest, EveryStartOfThePlayIsTakenUpOnceItsInputHasMoved2r) {
+  // Candidate::Predict chooses where the play was before the record on the segments before the
+  // play's input first moves 2r from its first value v0 (PlayStates' `taken_up`): every start in
+  // [v0 − r, v0 + r] is then at v ∓ r. After that sample the two simulations below differ only by
+  // the free response of the plant's state: for 3/(s + 3) sampled at ts, by a factor
+  // a = exp(−3 ts) per sample, exactly; before it, not.
+  const double r = 0.2, ts = 0.1, v0 = 0.5;
+  Eigen::VectorXd u(60);
+  for (long k = 0; k < u.size(); ++k) u(k) = v0 + 0.5 * std::sin(0.05 * k);
+  long taken_up = 0;
+  while (std::abs(u(taken_up) - v0) < 2 * r) ++taken_up;
+  ASSERT_EQ(taken_up, 19);  // 0.5 sin(0.05 k) ≥ 0.4 first at k = 19
+  EffectSimulationOptions low, high;
+  low.play_state = v0 - r;
+  high.play_state = v0 + r;
+  const Effect play{EffectKind::kBacklash, {r}};
+  const Eigen::VectorXd e = SimulateWithEffect(FirstOrder(1.0, 3.0), play, u, ts, high) -
+                            SimulateWithEffect(FirstOrder(1.0, 3.0), play, u, ts, low);
+  const double a = std::exp(-3.0 * ts);
+  for (long k = taken_up; k + 1 < u.size(); ++k) EXPECT_NEAR(e(k + 1), a * e(k), 1e-9 * std::abs(e(k))) << k;
+  double before = 0;
+  for (long k = 1; k < taken_up; ++k) before = std::max(before, std::abs(e(k + 1) - a * e(k)));
+  EXPECT_GT(before, 1e-3);
+}
+
 TEST(EffectsTest, InputMapsInARigsOrderLimitThenDeadZoneThenPlay) {
   const std::vector<Effect> found = {{EffectKind::kBacklash, {0.1}},
                                      {EffectKind::kSensorNonlinearity, {1, 0, 0, 1}},
