@@ -597,8 +597,6 @@ std::vector<double> Candidate::PlayStates(const Eigen::VectorXd& x, const GapRec
   return {std::clamp(0.0, v0 - r, v0 + r), v0 - r, v0 - 0.5 * r, v0, v0 + 0.5 * r, v0 + r};
 }
 
-namespace {
-// The first `length` samples of `record` (its sensor steps within them).
 GapRecord RecordHead(const GapRecord& record, long length) {
   GapRecord head;
   head.u = record.u.head(length);
@@ -609,12 +607,11 @@ GapRecord RecordHead(const GapRecord& record, long length) {
     if (k < length) head.sensor_steps.push_back(k);
   return head;
 }
-}  // namespace
 
 Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& record,
                                    Nuisance* nuisance) const {
   long taken_up = 0;
-  const std::vector<double> plays = PlayStates(x, record, &taken_up);
+  const std::vector<double> plays = PlayStates(x, record, spec_.segment > 0 ? &taken_up : nullptr);
   if (plays.empty()) return PredictFrom(x, record, nuisance, 0.0);
   // Under multiple shooting every segment has a free state, so the play's start shows in the
   // segments up to the one where it is taken up (and beyond only through the nuisance they
@@ -624,11 +621,10 @@ Eigen::VectorXd Candidate::Predict(const Eigen::VectorXd& x, const GapRecord& re
   const GapRecord* scored = &record;
   GapRecord head;
   if (spec_.segment > 0) {
+    const long shows = std::max<long>(taken_up, record.score_from);  // its segment: the last it shows in
     long end = record.y.size();
     for (const auto& segment : Segments(record, spec_.segment))
-      if (segment.first <= std::max<long>(taken_up, record.score_from) &&
-          std::max<long>(taken_up, record.score_from) < segment.first + segment.second)
-        end = segment.first + segment.second;
+      if (segment.first <= shows && shows < segment.first + segment.second) end = segment.first + segment.second;
     if (2 * end <= record.y.size()) {
       head = RecordHead(record, end);
       scored = &head;

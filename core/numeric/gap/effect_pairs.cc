@@ -53,13 +53,12 @@ SecondEffectTest TestSecondEffect(const FitContext& ctx, const CandidateWork& on
   const int dof = std::max(1, b.parameters - a.parameters +
                                   static_cast<int>(std::max<long>(0, b.nuisance_estimation - a.nuisance_estimation)));
   SecondEffectTest t;
-  const double level = ctx.options->significance / ctx.k_effects;
   t.lr = ctx.n_est * std::log(a.estimation_mse / std::max(b.estimation_mse, 1e-300));
-  t.threshold = ChiSquareQuantile(1 - level, dof);
+  t.threshold = ChiSquareQuantile(1 - ctx.options->significance / ctx.k_effects, dof);
   t.signature = Correlation(two.y_val - one.y_val, ctx.y_val - one.y_val);
   const long extra = std::max<long>(0, b.nuisance_validation - a.nuisance_validation);
   t.gain_z = ValidationGainZ(ctx.y_val, one.y_val, two.y_val,
-                             extra * b.validation_mse / std::max<long>(1, ctx.n_val - b.nuisance_validation));
+                             NuisanceGainBias(extra, b.validation_mse, ctx.n_val, b.nuisance_validation));
   t.gain_threshold = NormalUpperQuantile(ctx.options->significance);
   return t;
 }

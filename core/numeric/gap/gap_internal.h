@@ -213,8 +213,14 @@ double ValidationBic(long n_val, long n_est, double mse, int parameters, long nu
 // long enough for noise of a long correlation time, which the fixed lag under-covers.
 double ValidationGainZ(const Eigen::VectorXd& y, const Eigen::VectorXd& y_ref, const Eigen::VectorXd& y_c,
                        double bias = 0.0, bool automatic_lag = false);
+// The `bias` for ValidationGainZ of a fit `c` that fits `extra` more nuisance columns on the
+// validation records than its reference: extra · σ̂²/N with σ̂² = mse·N_val/(N_val − nuisance_val).
+double NuisanceGainBias(long extra, double validation_mse, long n_val, long nuisance_val);
 // One-sided normal quantile at level `alpha` (z with P(Z > z) = alpha).
 double NormalUpperQuantile(double alpha);
+
+// The first `length` samples of `record` (its sensor steps within them; score_from kept).
+GapRecord RecordHead(const GapRecord& record, long length);
 
 // Simulation over the scored samples of every record, concatenated.
 Eigen::VectorXd Stack(const std::vector<GapRecord>& records,

@@ -272,13 +272,8 @@ void SplitRecord(const GapRecord& record, std::vector<GapRecord>& estimation,
                  std::vector<GapRecord>& validation) {
   const long n = record.u.size();
   const long half = n / 2;
-  GapRecord est = record;
-  est.u = record.u.head(half);
-  est.y = record.y.head(half);
+  GapRecord est = gap_detail::RecordHead(record, half);
   est.score_from = 0;
-  est.sensor_steps.clear();
-  for (long s : record.sensor_steps)
-    if (s < half) est.sensor_steps.push_back(s);
   GapRecord val = record;
   val.score_from = static_cast<int>(half);
   estimation.push_back(est);

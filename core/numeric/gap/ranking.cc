@@ -27,6 +27,10 @@ double Correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   return d > 0 ? ac.dot(bc) / d : 0.0;
 }
 
+double NuisanceGainBias(long extra, double validation_mse, long n_val, long nuisance_val) {
+  return extra * validation_mse / std::max<long>(1, n_val - nuisance_val);
+}
+
 double ValidationGainZ(const Eigen::VectorXd& y, const Eigen::VectorXd& y_ref, const Eigen::VectorXd& y_c,
                        double bias, bool automatic_lag) {
   const Eigen::ArrayXd d = (y - y_ref).array().square() - (y - y_c).array().square();
@@ -107,7 +111,7 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
     c.signature = Correlation(w.y_val - y_refit_val, y_val - y_refit_val);
     const long extra = c.nuisance_validation - ctx.refit_nuisance_val;
     c.validation_gain_z = ValidationGainZ(y_val, y_refit_val, w.y_val,
-                                          extra * c.validation_mse / std::max<long>(1, n_val - c.nuisance_validation));
+                                          NuisanceGainBias(extra, c.validation_mse, n_val, c.nuisance_validation));
     // At the plain level: the effect has already passed the Bonferroni-corrected LR test on the
     // estimation records; this is an independent confirmation on records it was not fitted to.
     w.gain_significant = c.validation_gain_z > NormalUpperQuantile(options.significance);
