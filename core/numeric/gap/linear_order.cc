@@ -10,11 +10,13 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "core/numeric/gap/gap_internal.h"
+#include "core/numeric/time_domain/subspace.h"
 #include "core/numeric/validation.h"
 
 namespace idrig::gap_detail {
@@ -44,6 +46,85 @@ double VerdictBic(const FitContext& ctx, const GapVerdict& v, int first_paramete
                                                                           : std::vector<double>{});
   }
   return ValidationBic(ctx.n_val, ctx.n_est, mse, k, v.nuisance_validation);
+}
+
+// A data-driven start for the linear part (the linear-in-parameters first estimate that every
+// structure with one gets): the best linear approximation of the rig from the longest estimation
+// record, by subspace identification (CVA, [VODM] Table 3.1; order n0 + 2, G0's whole-sample
+// delay, means removed), its poles taken to continuous time (s = ln z / Ts; a pole outside the
+// unit circle reflected, one on the negative real axis — which no continuous model of this order
+// samples to — placed at the Nyquist frequency on the real axis), and the numerator of the
+// structure's degree by linear least squares on the output with those poles fixed: one column
+// per coefficient b_j (the simulated s^j/den(s) driven by u, with G0's delay), a constant per
+// record and, on an integrating G0, the same columns driven by 1 for the actuator offset. The
+// fit's G0·P/P starts hold two poles and zeros that cancel, where the new ones have no gradient
+// apart and the fit can stall in whichever basin the start's frequency is nearest; this start is
+// already near the rig's own. Empty when the identification fails (a record too short for the
+// block rows, an input that is not persistently exciting).
+std::optional<TransferFunction> SubspaceStart(const FitContext& ctx, int order, long num_degree) {
+  const std::vector<GapRecord>& records = *ctx.estimation;
+  const GapRecord* longest = &records.front();
+  for (const GapRecord& r : records)
+    if (r.u.size() > longest->u.size()) longest = &r;
+  const double ts = longest->sample_time;
+  const TransferFunction g0n = Normalized(*ctx.g0);
+  try {
+    SubspaceOptions so;
+    so.order = order;
+    so.max_order = std::max(10, order);
+    so.weighting = SubspaceWeighting::kCva;
+    so.feedthrough = g0n.num.size() == g0n.den.size();
+    so.input_delay = static_cast<int>(std::floor(ctx.g0->delay_s / ts + 1e-9));
+    const Eigen::VectorXd u = longest->u.array() - longest->u.mean();
+    const Eigen::VectorXd y = longest->y.array() - longest->y.mean();
+    const SubspaceResult sub = IdentifySubspace(MakeIoRecord(u, y, ts), so);
+    const Eigen::VectorXcd z = sub.model.A.eigenvalues();
+    Eigen::VectorXcd s(z.size());
+    for (long i = 0; i < z.size(); ++i) {
+      const double r = std::max(std::abs(z(i)), 1e-12);
+      const double radius = r > 1.0 ? 1.0 / r : r;
+      if (z(i).real() < 0 && std::abs(z(i).imag()) < 1e-9 * r)
+        s(i) = std::log(radius) / ts - M_PI / ts;
+      else
+        s(i) = std::complex<double>(std::log(radius), std::arg(z(i))) / ts;
+    }
+    const Eigen::VectorXd den = PolynomialFromRoots(s);
+    // Columns: b_j (j = 0..num_degree, descending), then du's, then one constant per record.
+    const bool du = ctx.integrating;
+    const long nb = num_degree + 1, cols = nb * (du ? 2 : 1) + static_cast<long>(records.size());
+    long rows = 0;
+    for (const GapRecord& r : records) rows += r.u.size();
+    Eigen::MatrixXd phi = Eigen::MatrixXd::Zero(rows, cols);
+    Eigen::VectorXd target(rows);
+    long row = 0;
+    for (size_t k = 0; k < records.size(); ++k) {
+      const GapRecord& r = records[k];
+      const long n = r.u.size();
+      for (long j = 0; j < nb; ++j) {
+        TransferFunction basis;
+        basis.num = Eigen::VectorXd::Zero(nb);
+        basis.num(j) = 1.0;
+        basis.den = den;
+        basis.delay_s = ctx.g0->delay_s;
+        phi.block(row, j, n, 1) = SimulateWithEffect(basis, Effect{}, r.u, r.sample_time);
+        if (du)
+          phi.block(row, nb + j, n, 1) =
+              SimulateWithEffect(basis, Effect{}, Eigen::VectorXd::Ones(n), r.sample_time);
+      }
+      phi.block(row, cols - static_cast<long>(records.size()) + static_cast<long>(k), n, 1).setOnes();
+      target.segment(row, n) = r.y;
+      row += n;
+    }
+    const Eigen::VectorXd b = phi.colPivHouseholderQr().solve(target);
+    TransferFunction g;
+    g.num = b.head(nb);
+    g.den = den;
+    g.delay_s = ctx.g0->delay_s;
+    if (!g.num.allFinite() || !g.den.allFinite() || g.num.cwiseAbs().maxCoeff() == 0.0) return std::nullopt;
+    return Normalized(g);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
 }
 
 }  // namespace
@@ -94,6 +175,8 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
     while (g.num.size() - 1 < num_degree) g.num = Multiply(g.num, high);
     starts.emplace_back(std::string("the fitted ") + EffectName(c.effect.kind), Normalized(g));
   }
+  if (const std::optional<TransferFunction> g = SubspaceStart(ctx, order, num_degree))
+    starts.emplace_back("the subspace estimate", *g);
   FitOutcome best;
   std::unique_ptr<Candidate> best_cand;
   std::string best_start;

@@ -89,16 +89,12 @@ Rig SensorRig(double wz_over_w0, double quadratic, double cubic, uint64_t noise_
   return rig;
 }
 
-// Disabled at stop 31: on this session's machines (AMD EPYC, the build of main at 35a1ae5 as
-// well) the order-4 part is found (LR 1713, ΔBIC −1277 against parameter_mismatch, validation
-// NRMSE 0.41 against 0.51) but its validation gain over the verdict is z = 1.48 with the
-// Newey–West lag at its cap (ρ of the squared-error differences clamped at 0.99), below 2.31, so
-// it is not adopted; at stop 30 (CI, 350/350) it passed. Which of the fit's starts wins, and so
-// the gain, moves with the machine's arithmetic: docs/gap.md, trade-offs. At stop 33 it passes
-// here (linear part NRMSE 0.41, the map after it 0.0317), and with the noise of seeds 405 and 406
-// (linear part 0.066), but not with seed 407 (the linear part's fit stops at 0.116 and no map
-// is named after it): the linear part's basin still moves with the draw; left disabled.
-TEST(GapLinearOrderTest, DISABLED_MissingAntiResonanceThenASensorMapIsUnmodelledDynamicsThenTheMap) {
+// Disabled from stop 31 to stop 35: the linear part's fit from the G0·P/P starts stopped in a
+// basin that moved with the machine's arithmetic and the noise draw (NRMSE 0.41 with this seed,
+// 0.116 with seed 407 and no map after it, for 0.066 with most seeds). With the subspace start
+// (linear_order.cc, SubspaceStart) the fit starts at the rig's own poles: 0.0675 here, 0.066
+// with seed 407, and the map after it at 0.031 for seeds 402 and 405–413 alike.
+TEST(GapLinearOrderTest, MissingAntiResonanceThenASensorMapIsUnmodelledDynamicsThenTheMap) {
   const Rig rig = SensorRig(1.3, 0.15, -0.1, 402);
   const GapReport report = DiagnoseGap(rig.c.sim, {rig.c.estimation}, {rig.c.validation});
   PrintReport(report);
@@ -109,6 +105,15 @@ TEST(GapLinearOrderTest, DISABLED_MissingAntiResonanceThenASensorMapIsUnmodelled
   EXPECT_EQ(v.effects[0].kind, EffectKind::kSensorNonlinearity);
   EXPECT_LT(v.nrmse_after, v.linear_nrmse_after);  // the map closes what the linear fix leaves
   EXPECT_LT(v.linear_nrmse_after, v.nrmse_before);
+  // The linear part is as good as the rig's own (the best linear output-error model of this
+  // structure is at least as good as the true linear part, the map unmodelled; 0.076 here). From
+  // the G0·P/P starts alone it stopped at 0.41.
+  const GapRecord& val = rig.c.validation;
+  Eigen::VectorXd y_linear = SimulateWithEffect(rig.real, Effect{}, val.u, val.sample_time);
+  y_linear.array() += (val.y - y_linear).mean();
+  const double true_linear_nrmse = (val.y - y_linear).norm() / (val.y.array() - val.y.mean()).matrix().norm();
+  std::printf("the rig's own linear part: validation NRMSE %.4f\n", true_linear_nrmse);
+  EXPECT_LT(v.linear_nrmse_after, 1.05 * true_linear_nrmse);
 }
 
 TEST(GapLinearOrderTest, MildMissingDynamicsUnderAStrongSensorMapStillGoesToTheLinearPartFirst) {
