@@ -666,15 +666,33 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
     const FitOutcome gain_fit = Minimise(gain_residuals, gain_start, 200);
     const double lr = n_est * std::log(gain_fit.mse / refit_fit.mse);
     const int dof = std::max(1, refit.Size() - gain.Size());
-    if (lr < ChiSquareQuantile(1 - options.significance, dof)) {
+    std::string evidence = "LR " + std::to_string(lr);
+    bool pure_gain = lr < ChiSquareQuantile(1 - options.significance, dof);
+    if (!pure_gain) {
+      // The LR counts every estimation sample as independent: under coloured noise the full
+      // refit's other coefficients follow the noise's slow wander and pass it. The dynamics
+      // changed only if the refit also simulates the validation records significantly better
+      // than the gain alone (the same Diebold–Mariano test with the automatic Newey–West lag
+      // that the order check's adoption uses).
+      const Eigen::VectorXd y_gain_val =
+          Stack(validation, [&](const GapRecord& r) { return gain.Predict(gain_fit.x, r); });
+      const double z = ValidationGainZ(y_val, y_gain_val, y_refit_val, 0.0, true);
+      pure_gain = z < NormalUpperQuantile(options.significance);
+      evidence += std::string(" above the threshold, ") + (pure_gain ? "but" : "and") +
+                  " the full refit's validation gain over it z = " + std::to_string(z);
+    }
+    if (pure_gain) {
       v.effect = "ambiguous";
       v.tied = {"parameter_mismatch", "dead_zone", "backlash", "input_saturation"};
       v.confidence = 1.0 / v.tied.size();  // nothing in the data prefers one of them
       report.notes.push_back(
           "the input takes two values only, and the gap is a pure gain change (gain-only refit "
-          "not worse: LR " + std::to_string(lr) + "): input dead zone, backlash and symmetric "
+          "not worse: " + evidence + "): input dead zone, backlash and symmetric "
           "saturation act as a gain on such a signal (an asymmetric saturation as a gain plus an offset, which the output offset absorbs) and cannot be told from a parameter "
           "mismatch; excite at several amplitudes to separate them");
+    } else {
+      report.notes.push_back("the input takes two values only, and the refit changes more than the gain (" +
+                             evidence + "): a parameter mismatch, not a gain that an input map could be");
     }
   }
   // `none` on top says G0 fits within the noise. That holds only when what G0 leaves on the
