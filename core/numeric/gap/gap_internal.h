@@ -219,6 +219,13 @@ double NuisanceGainBias(long extra, double validation_mse, long n_val, long nuis
 // One-sided normal quantile at level `alpha` (z with P(Z > z) = alpha).
 double NormalUpperQuantile(double alpha);
 
+// Samples scored in the longest of the records (after its warm-up).
+inline long LongestScored(const std::vector<GapRecord>& records) {
+  long longest = 0;
+  for (const auto& r : records) longest = std::max<long>(longest, r.u.size() - r.score_from);
+  return longest;
+}
+
 // The first `length` samples of `record` (its sensor steps within them; score_from kept).
 GapRecord RecordHead(const GapRecord& record, long length);
 

@@ -116,13 +116,6 @@ double SlowTimeConstant(const TransferFunction& plant, double ts, double duratio
   return std::clamp(slow, 2 * ts, duration);
 }
 
-// Samples scored in the longest of the records (after its warm-up).
-long LongestScored(const std::vector<GapRecord>& records) {
-  long longest = 0;
-  for (const auto& r : records) longest = std::max<long>(longest, r.u.size() - r.score_from);
-  return longest;
-}
-
 // Multiple shooting when G0 integrates or is lightly damped: the slowest mode decays by less
 // than e^-5 over the longest record, so an open-loop simulation from a wrong state (or with a
 // small input bias) drifts. Segments of max(N/8, 100·(n+1)) samples each get a free state;
