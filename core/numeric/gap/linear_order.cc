@@ -48,13 +48,16 @@ double VerdictBic(const FitContext& ctx, const GapVerdict& v, int first_paramete
   return ValidationBic(ctx.n_val, ctx.n_est, mse, k, v.nuisance_validation);
 }
 
-// Modes of `g` whose free response outlasts `horizon_s`: the envelope e^{Re(s)·t} still above
-// 1 % at its end (−Re(s)·T < ln 100; an integrator or an unstable pole counts).
+// Oscillatory poles of `g` whose free response outlasts `horizon_s`: a complex pole whose
+// envelope e^{Re(s)·t} is still above 1 % at its end (−Re(s)·T < ln 100; an unstable one counts).
+// Slow real poles are not counted: a free response that creeps reproduces a drift, which the
+// nuisance already fits, not a hum.
 int LastingModes(const TransferFunction& g, double horizon_s) {
   const Eigen::VectorXcd poles = Poles(g);
   int lasting = 0;
   for (long i = 0; i < poles.size(); ++i)
-    if (!(-poles(i).real() * horizon_s > std::log(100.0))) ++lasting;
+    if (std::abs(poles(i).imag()) > 1e-9 * std::abs(poles(i)) && !(-poles(i).real() * horizon_s > std::log(100.0)))
+      ++lasting;
   return lasting;
 }
 
@@ -187,13 +190,13 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
   }
   if (const std::optional<TransferFunction> g = SubspaceStart(ctx, order, num_degree))
     starts.emplace_back("the subspace estimate", *g);
-  // A mode whose free response lasts over the record, where G0 has none, can reproduce an
+  // An oscillatory mode whose free response lasts over the record, where G0 has none, can reproduce an
   // output disturbance (mains hum, a vibration from elsewhere) through the free initial state
   // rather than through the input — the reason a resonance is set aside when G0's residual
   // does not follow the input (gap_report.cc). The subspace estimate takes such a disturbance
   // as a mode of the plant (a 3σ hum at 0.23 × the sample rate on a delay case: an undamped
-  // pair, and the verdict `unmodelled_dynamics`). A fit with more lasting modes than G0 is not
-  // the linear part.
+  // pair, and the verdict `unmodelled_dynamics`). A fit with more lasting oscillatory modes than
+  // G0 is not the linear part.
   const double horizon_s = LongestScored(*ctx.validation) * ctx.scales.ts;
   const int g0_lasting = LastingModes(*ctx.g0, horizon_s);
   std::vector<std::string> set_aside;
@@ -218,12 +221,12 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
   }
   std::string lasting_note;
   if (!set_aside.empty()) {
-    lasting_note = "; set aside (a mode that outlasts the record, where G0 has none):";
+    lasting_note = "; set aside (a ringing mode that outlasts the record, where G0 has none):";
     for (const std::string& name : set_aside) lasting_note += " " + name;
   }
   if (!best_cand) {
     report.notes.push_back("linear order check: every fit of order " + std::to_string(order) +
-                           " holds a mode that outlasts the record where G0 has none (it could stand in for an "
+                           " holds a ringing mode that outlasts the record where G0 has none (it could stand in for an "
                            "output disturbance): not tried" + lasting_note);
     return LinearOrderCheck{};
   }
