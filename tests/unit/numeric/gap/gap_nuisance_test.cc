@@ -241,6 +241,14 @@ GapReport DiagnoseOnOneThread(const GapCase& c, bool fit_drift = true) {
   return DiagnoseGap(c.sim, {c.estimation}, {c.validation}, options);
 }
 
+// The last of the report's notes that contains `text` (empty when none does).
+std::string LastNoteWith(const GapReport& report, const std::string& text) {
+  std::string found;
+  for (const auto& n : report.notes)
+    if (n.find(text) != std::string::npos) found = n;
+  return found;
+}
+
 const CandidateFit& Ranked(const GapReport& report, EffectKind kind) {
   const auto it = std::find_if(report.ranking.begin(), report.ranking.end(),
                                [&](const CandidateFit& f) { return f.effect.kind == kind && f.effects.size() <= 1; });
@@ -461,9 +469,7 @@ TEST(GapColouredNoiseTest, AGainChangeUnderATwoValuedInputIsAmbiguousThoughTheLr
   ASSERT_TRUE(c.excitation == "rbs" || c.excitation == "prbs") << c.excitation;
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
-  std::string note;
-  for (const auto& n : report.notes)
-    if (n.find("the input takes two values only") != std::string::npos) note = n;
+  const std::string note = LastNoteWith(report, "the input takes two values only");
   std::printf("input saturation under %s, coloured noise: verdict %s; %s\n", c.excitation.c_str(),
               v.effect.c_str(), note.c_str());
   EXPECT_EQ(v.effect, "ambiguous");
@@ -483,9 +489,7 @@ TEST(GapColouredNoiseTest, AMismatchOfTheDynamicsUnderATwoValuedInputStaysAParam
   options.excitation = "rbs";
   const GapCase c = MakeGapCase(EffectKind::kParameterMismatch, rng, options);
   const GapReport report = DiagnoseOnOneThread(c);
-  std::string note;
-  for (const auto& n : report.notes)
-    if (n.find("the input takes two values only") != std::string::npos) note = n;
+  const std::string note = LastNoteWith(report, "the input takes two values only");
   std::printf("parameter mismatch under rbs, coloured noise: verdict %s; %s\n", report.verdict.effect.c_str(),
               note.c_str());
   EXPECT_EQ(report.verdict.effect, "parameter_mismatch");
@@ -508,11 +512,8 @@ TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsNotReported) {
   const GapCase c = MakeGapCase(EffectKind::kOutputSaturation, rng, options);
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
-  std::string backward, second;
-  for (const auto& n : report.notes) {
-    if (n.find("backward check") != std::string::npos) backward = n;
-    if (n.find("second effect after") != std::string::npos) second = n;
-  }
+  const std::string backward = LastNoteWith(report, "backward check");
+  const std::string second = LastNoteWith(report, "second effect after");
   std::printf("fast-sampled output saturation: verdict %s (%zu effects); %s; %s\n", v.effect.c_str(),
               v.effects.size(), second.c_str(), backward.c_str());
   EXPECT_EQ(v.effect, "output_saturation");
@@ -536,9 +537,7 @@ TEST(GapPairTest, AnEffectThatFailsAsSecondAfterTheMainOneCannotComeFirstInstead
   const GapCase c = MakeGapCase(EffectKind::kCoulombFriction, rng, options);
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
-  std::string backward;
-  for (const auto& n : report.notes)
-    if (n.find("backward check") != std::string::npos) backward = n;
+  const std::string backward = LastNoteWith(report, "backward check");
   std::printf("friction at 60 dB: verdict %s (%zu effects); %s\n", v.effect.c_str(), v.effects.size(), backward.c_str());
   EXPECT_EQ(v.effect, "coulomb_friction");
   EXPECT_EQ(v.effects.size(), 1u);
