@@ -1,7 +1,7 @@
 // idrig gap diagnose --sim MODEL.json --data EST.csv [--data …] [--validate VAL.csv …] [--glitches bridge|keep]
 //                    [--drift fit|none] [--sensor-steps find|ignore] [--json]
 // idrig gap bench --cases N --seed S [--snr DB] [--samples N] [--ts S] [--jobs J] [--offsets] [--combos F]
-//                 [--pairs rig|any] [--excitation K] [--integrating] [--plants zeros|two-mass] [--damping LO,HI] [--noise-pole A]
+//                 [--pairs rig|any] [--excitation K] [--integrating] [--plants zeros|two-mass] [--damping LO,HI] [--noise-pole A] [--process-noise F]
 //                 [--add-glitches N] [--glitches bridge|keep] [--add-drift S] [--drift fit|none]
 //                 [--sensor-steps find|ignore] [--dump DIR] [--json]
 #include <algorithm>
@@ -70,7 +70,7 @@ struct BenchSettings {
   int cases = 26, samples = 4000, jobs = 2;
   double sample_time = 0.01;
   uint64_t seed = 1;
-  double snr = 30, combos = 0, noise_pole = 0;
+  double snr = 30, combos = 0, noise_pole = 0, process_noise = 0;
   std::vector<double> damping = {0.15, 0.8};
   bool json = false, offsets = false, integrating = false;
   int add_glitches = 0;
@@ -97,6 +97,7 @@ GapCaseOptions CaseOptions(const BenchSettings& b) {
   options.zeta_min = b.damping.at(0);
   options.zeta_max = b.damping.at(1);
   options.noise_pole = b.noise_pole;
+  options.process_noise = b.process_noise;
   options.plants = b.plants;
   options.glitches = b.add_glitches;
   options.drift = b.add_drift;
@@ -172,7 +173,7 @@ void RunBench(const BenchSettings& b) {
     nlohmann::json out = {{"cases", b.cases}, {"seed", b.seed}, {"snr_db", b.snr}, {"samples", b.samples}, {"sample_time", b.sample_time},
                           {"offsets", b.offsets}, {"combos", b.combos}, {"pairs", b.pairs},
                           {"integrating", b.integrating}, {"excitation", b.excitation},
-                          {"damping", b.damping}, {"noise_pole", b.noise_pole}, {"plants", b.plants}, {"only", b.only},
+                          {"damping", b.damping}, {"noise_pole", b.noise_pole}, {"process_noise", b.process_noise}, {"plants", b.plants}, {"only", b.only},
                           {"add_glitches", b.add_glitches}, {"glitches", b.glitches},
                           {"add_drift", b.add_drift}, {"drift", b.drift}, {"sensor_steps", b.sensor_steps},
                           {"single_cases", s.single_cases},
@@ -198,6 +199,7 @@ void RunBench(const BenchSettings& b) {
             << " dB, " << b.samples << " samples per record at Ts " << b.sample_time << " s"
             << (b.offsets ? ", actuator and sensor offsets" : "")
             << (b.add_glitches ? ", " + std::to_string(b.add_glitches) + " glitches per record (" + b.glitches + ")" : "")
+            << (b.process_noise > 0 ? ", process noise " + std::to_string(b.process_noise) + " of the noise variance" : "")
             << (b.add_drift > 0 ? ", a sensor drift of " + std::to_string(b.add_drift) + " noise sigmas per record" : "")
             << (b.drift == "none" ? ", drift not fitted" : "")
             << ", two-effect share " << b.combos << (b.pairs == "any" ? " (any pair)" : "")
@@ -368,6 +370,10 @@ void RegisterGapCommand(CLI::App& app) {
       ->check(CLI::Range(0.001, 5.0));
   bench->add_option("--noise-pole", b->noise_pole,
                     "colour the output noise: first-order pole A in [0, 0.99] (0: white; same variance)")
+      ->check(CLI::Range(0.0, 0.99));
+  bench->add_option("--process-noise", b->process_noise,
+                    "share F in [0, 0.99] of the noise variance that enters at the plant's input as a load "
+                    "disturbance (coloured by the plant; a random walk on an integrator); the rest is output noise")
       ->check(CLI::Range(0.0, 0.99));
   bench->add_flag("--offsets", b->offsets,
                   "random actuator offset (up to ±30 % of the command's peak) and sensor offset "

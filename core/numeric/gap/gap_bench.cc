@@ -316,9 +316,10 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const Effect& effect,
 Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Effect>& effects_in,
                             const Eigen::VectorXd& u, double sample_time, double noise_sigma,
                             std::mt19937_64& rng, double input_offset, double output_offset,
-                            double noise_pole, const Eigen::VectorXd& sensor_drift) {
+                            double noise_pole, const Eigen::VectorXd& sensor_drift,
+                            const Eigen::VectorXd& load) {
   if (effects_in.size() <= 1 && input_offset == 0 && output_offset == 0 && noise_pole == 0 &&
-      sensor_drift.size() == 0)
+      sensor_drift.size() == 0 && load.size() == 0)
     return SimulateRig(plant, effects_in.empty() ? Effect{} : effects_in.front(), u, sample_time,
                        noise_sigma, rng);
   std::vector<Effect> effects = effects_in;
@@ -352,6 +353,10 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Eff
       case EffectKind::kNone: break;
       default: g = ApplyLinearEffect(g, e); break;
     }
+  }
+  if (load.size() != 0) {
+    if (load.size() != w.size()) throw std::invalid_argument("rig simulation: the load disturbance and the input differ in length");
+    w += load;
   }
   EffectSimulationOptions fine;
   fine.substeps = 16;
@@ -399,6 +404,9 @@ void ValidateGapCaseOptions(const GapCaseOptions& o) {
   if (!o.plants.empty() && o.plants != "zeros" && o.plants != "two-mass")
     throw std::invalid_argument("gap case: plant family '" + o.plants + "' is not one of zeros, two-mass");
   if (o.glitches < 0) throw std::invalid_argument("gap case: a negative number of glitches");
+  if (!(o.process_noise >= 0 && o.process_noise < 1))
+    throw std::invalid_argument("gap case: process-noise share " + std::to_string(o.process_noise) +
+                                " is not in [0, 1)");
   if (!o.plants.empty() && o.integrating)
     throw std::invalid_argument("gap case: a plant family and --integrating are two plant choices; give one");
 }
@@ -468,6 +476,19 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
       if (e.kind == EffectKind::kActuatorLag) slow += e.params[0];
     warm = std::clamp<long>(static_cast<long>(10 * slow / options.sample_time), 100, 3000);
   }
+  // Process noise (GapCaseOptions::process_noise): the output RMS of the rig's linear part for a
+  // unit white load over a record (after the warm-up, mean removed) scales the load.
+  const double share = options.process_noise;
+  double load_gain = 0;
+  if (share > 0) {
+    std::mt19937_64 unit(1);
+    Eigen::VectorXd d(warm + options.samples);
+    for (long k = 0; k < d.size(); ++k) d(k) = Gaussian(unit);
+    const Eigen::VectorXd yd = SimulateWithEffect(c.real, Effect{}, d, options.sample_time);
+    const Eigen::VectorXd tail = yd.tail(options.samples);
+    const double rms = std::sqrt((tail.array() - tail.mean()).square().mean());
+    if (rms > 0) load_gain = std::sqrt(share) / rms;
+  }
   // drift: the sensor's rise over the record, in noise sigmas (GapCaseOptions::drift).
   auto record = [&](const Eigen::VectorXd& u, double sigma, std::mt19937_64& g, double drift = 0) {
     Eigen::VectorXd padded = Eigen::VectorXd::Zero(warm + u.size());
@@ -477,8 +498,14 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
       ramp = Eigen::VectorXd::Zero(padded.size());
       for (long k = 0; k < u.size(); ++k) ramp(warm + k) = drift * sigma * k / std::max<long>(1, u.size() - 1);
     }
-    const Eigen::VectorXd y = SimulateRig(c.real, c.effects, padded, options.sample_time, sigma, g,
-                                          c.input_offset, c.output_offset, options.noise_pole, ramp);
+    Eigen::VectorXd load;
+    if (share > 0 && sigma > 0) {
+      load.resize(padded.size());
+      for (long k = 0; k < load.size(); ++k) load(k) = load_gain * sigma * Gaussian(g);
+    }
+    const double output_sigma = sigma * std::sqrt(1 - share);
+    const Eigen::VectorXd y = SimulateRig(c.real, c.effects, padded, options.sample_time, output_sigma, g,
+                                          c.input_offset, c.output_offset, options.noise_pole, ramp, load);
     return Eigen::VectorXd(y.tail(u.size()));
   };
   // Noise from the SNR of the rig's own output on the estimation input.

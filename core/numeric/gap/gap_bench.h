@@ -54,6 +54,13 @@ struct GapCaseOptions {
   // A slow sensor drift: a ramp from 0 to `drift` noise sigmas over the estimation record and to
   // −`drift` over the validation record, in the analogue reading (before the ADC, after the noise).
   double drift = 0;
+  // Process noise: the share F in [0, 1) of the noise variance that enters at the plant's input
+  // as a load disturbance (white, held over each sample, after the input maps and before a
+  // friction or spring; the plant colours it, an integrator makes it a random walk — and the
+  // linear effects folded into the plant, a lag or a delay, act on it too), scaled so that its
+  // part of the output has variance F·σ² on the rig's linear part over a record; the rest,
+  // (1 − F)·σ², is output noise as before. 0: output noise only (the same numbers as before).
+  double process_noise = 0;
 };
 
 // Adds `count` glitches (as GapCaseOptions::glitches) to y.
@@ -97,7 +104,8 @@ const std::vector<std::pair<EffectKind, EffectKind>>& CoOccurringEffectPairs();
 // output maps (saturation, sensor), noise, ADC (quantisation), sensor offset. With noise_pole
 // a ≠ 0 the noise is coloured, first-order autoregressive e(k) = a e(k−1) + √(1 − a²) σ w(k)
 // (the same variance σ², the same random numbers as white noise). `sensor_drift` (per sample;
-// empty: none) is added to the analogue reading with the noise, before the ADC.
+// empty: none) is added to the analogue reading with the noise, before the ADC. `load` (per
+// sample; empty: none) is added to the plant's input after the input maps (a load disturbance).
 Eigen::VectorXd SimulateRig(const TransferFunction& plant, const Effect& effect,
                             const Eigen::VectorXd& u, double sample_time, double noise_sigma,
                             std::mt19937_64& rng);
@@ -105,7 +113,8 @@ Eigen::VectorXd SimulateRig(const TransferFunction& plant, const std::vector<Eff
                             const Eigen::VectorXd& u, double sample_time, double noise_sigma,
                             std::mt19937_64& rng, double input_offset = 0,
                             double output_offset = 0, double noise_pole = 0,
-                            const Eigen::VectorXd& sensor_drift = Eigen::VectorXd());
+                            const Eigen::VectorXd& sensor_drift = Eigen::VectorXd(),
+                            const Eigen::VectorXd& load = Eigen::VectorXd());
 
 // Every unordered pair of the effects (none and parameter_mismatch aside) that the rig can
 // simulate together — all but friction with a cubic spring (one feedback effect at most): 54

@@ -310,6 +310,13 @@ void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& wor
 // sampled record shows it), or with an actuator lag longer than the longest record (an
 // integrator over the record, not a lag); ranking.cc.
 void MaskImplausibleDynamics(const Scales& scales, std::vector<CandidateWork>& work);
+// Where G0's validation residual is above the floor but does not follow the input (an output
+// disturbance or coloured noise, gap_report.cc), masks every single candidate — parameter_mismatch
+// over G0 as given, an effect over the refit — whose validation gain is not significant with the
+// automatic Newey–West lag (ValidationGainZ), i.e. once the residual's correlation is counted;
+// the likelihood ratio, the validation BIC and the fixed-lag gain count the samples as
+// independent (ranking.cc).
+void MaskGainsWithinColouredNoise(const FitContext& ctx, std::vector<CandidateWork>& work);
 
 // The criterion that picks one of an effect's variants (FitEffect, the pair search): the
 // validation BIC where there are several, the estimation BIC otherwise.

@@ -630,6 +630,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
       w.fit.note = "set aside: G0's validation residual does not follow the input, and a mode added to the "
                    "plant acts through the input (its free response could reproduce an output disturbance)";
     }
+  if (disturbance_only) MaskGainsWithinColouredNoise(ctx, work);
   report.ranking = RankCandidates(work, options);
   const double y_val_spread = (y_val.array() - y_val.mean()).matrix().norm() / std::sqrt(double(n_val));
 

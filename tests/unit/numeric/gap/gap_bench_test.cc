@@ -90,6 +90,38 @@ TEST(GapBenchTest, ColouredNoiseHasTheRequestedPoleAndTheSameVariance) {
   }
 }
 
+TEST(GapBenchTest, ProcessNoiseSplitsTheVarianceAndIsColouredByThePlant) {
+  // A share F of σ² enters at the plant's input and is low-passed by it; the rest is white output
+  // noise: the total variance stays σ², and the lag-1 autocovariance is F σ² ρ_p(1), where the
+  // plant's own ρ_p(1) lies between e^(−ω Ts) ≥ e^(−0.15) (its fastest corner, 15 rad/s at 0.01 s)
+  // and 1. F = 0 draws the same case as before the option existed.
+  for (const double f : {0.0, 0.5, 0.9}) {
+    for (uint64_t seed = 21; seed <= 23; ++seed) {
+      std::mt19937_64 rng(seed), plain_rng(seed);
+      GapCaseOptions options;
+      options.samples = 20000;
+      options.offsets = true;
+      options.process_noise = f;
+      const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
+      const Eigen::VectorXd e = NoiseOf(c);
+      const Eigen::VectorXd centred = e.array() - e.mean();
+      const long n = e.size();
+      const double var = centred.squaredNorm() / n;
+      const double lag1 = centred.head(n - 1).dot(centred.tail(n - 1)) / (n - 1) / var;
+      EXPECT_NEAR(std::sqrt(var), c.noise_sigma, 0.15 * c.noise_sigma) << "share " << f << ", seed " << seed;
+      EXPECT_GT(lag1, std::exp(-0.15) * f - 0.03) << "share " << f << ", seed " << seed;
+      EXPECT_LT(lag1, f + 0.03) << "share " << f << ", seed " << seed;
+      if (f == 0) {
+        GapCaseOptions before;
+        before.samples = 20000;
+        before.offsets = true;
+        const GapCase plain = MakeGapCase(EffectKind::kNone, plain_rng, before);
+        EXPECT_EQ(plain.estimation.y, c.estimation.y);
+      }
+    }
+  }
+}
+
 TEST(GapBenchTest, DampingRatiosAreDrawnInTheRequestedRange) {
   // ζ of a second-order plant s² + 2ζω s + ω²: den(1)/(2√den(2)).
   int second_order = 0;
@@ -287,6 +319,14 @@ TEST(GapBenchTest, BadPairsAndSharesAreNamed) {
   GapCaseOptions unstable_noise;
   unstable_noise.noise_pole = 1.0;
   EXPECT_THROW(MakeGapCase(EffectKind::kNone, rng, unstable_noise), std::invalid_argument);
+  GapCaseOptions all_process_noise;
+  all_process_noise.process_noise = 1.0;  // no output noise left, and a share is below 1
+  try {
+    MakeGapCase(EffectKind::kNone, rng, all_process_noise);
+    FAIL() << "a process-noise share of 1 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("process-noise share"), std::string::npos) << e.what();
+  }
   EXPECT_THROW(ScoreGapBench({GapBenchOutcome{}}), std::invalid_argument);
 }
 

@@ -496,6 +496,38 @@ TEST(GapColouredNoiseTest, AMismatchOfTheDynamicsUnderATwoValuedInputStaysAParam
   EXPECT_NE(note.find("and the full refit's validation gain"), std::string::npos) << note;
 }
 
+// Process noise: a load disturbance that the plant colours (`idrig gap bench --cases 30 --seed
+// 2001 --offsets --only none --process-noise 0.9`). G0 is the rig; what it leaves is the noise,
+// correlated over the plant's time constant. Case 221 (levels) was named parameter_mismatch
+// (LR 3.3 times its threshold, 3 % of the gap closed) and case 377 (PRBS) output_saturation:
+// the LR, the validation BIC and the fixed-lag validation gain count every sample as
+// independent. The refit and the effect must gain on validation with the automatic lag too.
+struct ProcessNoiseCase {
+  int index;
+  const char* was;
+};
+class GapProcessNoiseTest : public ::testing::TestWithParam<ProcessNoiseCase> {};
+
+TEST_P(GapProcessNoiseTest, ALoadDisturbanceThePlantColoursIsNotAnEffect) {
+  std::mt19937_64 rng(BenchCaseSeed(2001, GetParam().index));
+  GapCaseOptions options;
+  options.offsets = true;
+  options.process_noise = 0.9;
+  const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const std::string was_note = Ranked(report, EffectFromName(GetParam().was)).note;
+  std::printf("none under process noise (%s): verdict %s; %s: %s\n", c.excitation.c_str(),
+              report.verdict.effect.c_str(), GetParam().was, was_note.c_str());
+  EXPECT_EQ(report.verdict.effect, "none");
+  EXPECT_NE(LastNoteWith(report, "does not follow the input"), "");
+  EXPECT_NE(was_note.find("not significant once the residual's correlation is counted"), std::string::npos) << was_note;
+}
+
+INSTANTIATE_TEST_SUITE_P(Seed2001, GapProcessNoiseTest,
+                         ::testing::Values(ProcessNoiseCase{221, "parameter_mismatch"},
+                                           ProcessNoiseCase{377, "output_saturation"}),
+                         [](const auto& info) { return "case" + std::to_string(info.param.index); });
+
 TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsNotReported) {
   // `idrig gap bench --cases 26 --seed 51 --offsets --ts 0.002 --samples 6000`, case 23: an
   // output saturation, fast sampling. The single saturation fit had stopped above the noise; the
