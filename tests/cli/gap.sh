@@ -147,6 +147,11 @@ jq -e '.excitation == "multisine"' "$dir/ms/case0-truth.json" > /dev/null || fai
 jq -e '.damping == [0.02, 0.1] and .noise_pole == 0.5' "$dir/ld.json" > /dev/null || fail "bench JSON lacks damping/noise_pole"
 expect "LO <= HI" "$idrig" gap bench --cases 1 --damping 0.5,0.1
 expect "noise-pole" "$idrig" gap bench --cases 1 --noise-pole 1.5
+# Process noise (a load disturbance the plant colours): echoed, and a share of 1 or more named.
+"$idrig" gap bench --cases 1 --seed 4 --samples 600 --process-noise 0.5 --json > "$dir/pn.json" 2>/dev/null \
+  || fail "gap bench --process-noise exited with $?"
+jq -e '.process_noise == 0.5' "$dir/pn.json" > /dev/null || fail "bench JSON lacks process_noise"
+expect "process-noise" "$idrig" gap bench --cases 1 --process-noise 1
 # Plant families; a wrong name, and a family beside --integrating, are named.
 "$idrig" gap bench --cases 1 --seed 4 --samples 600 --plants two-mass --dump "$dir/tm" --json > "$dir/tm.json" 2>/dev/null \
   || fail "gap bench --plants two-mass exited with $?"

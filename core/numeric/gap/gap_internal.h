@@ -312,8 +312,8 @@ void MaskOneSidedDeadZone(const FitContext& ctx, std::vector<CandidateWork>& wor
 void MaskImplausibleDynamics(const Scales& scales, std::vector<CandidateWork>& work);
 // Where G0's validation residual is above the floor but does not follow the input (an output
 // disturbance or coloured noise, gap_report.cc), masks every single candidate — parameter_mismatch
-// over G0 as given, an effect over the refit — that reproduces little of the gap (signature under
-// 0.5) and whose validation gain is not significant with the automatic Newey–West lag
+// over G0 as given, an effect over the refit — that matches little of the gap (signature under
+// min_signature) and whose validation gain is not significant with the automatic Newey–West lag
 // (ValidationGainZ), i.e. once the residual's correlation is counted;
 // the likelihood ratio, the validation BIC and the fixed-lag gain count the samples as
 // independent (ranking.cc).

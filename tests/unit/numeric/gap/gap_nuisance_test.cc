@@ -497,13 +497,15 @@ TEST(GapColouredNoiseTest, AMismatchOfTheDynamicsUnderATwoValuedInputStaysAParam
 }
 
 // Process noise: a load disturbance that the plant colours (`idrig gap bench --cases 30 --seed
-// 2001 --offsets --only none --process-noise 0.9`). G0 is the rig; what it leaves is the noise,
-// correlated over the plant's time constant. Case 221 (levels) was named parameter_mismatch
-// (LR 3.3 times its threshold, 3 % of the gap closed) and case 377 (PRBS) output_saturation:
-// the LR, the validation BIC and the fixed-lag validation gain count every sample as
-// independent. The refit and the effect must gain on validation with the automatic lag too.
+// 2001 --offsets --only none --process-noise F`). G0 is the rig; what it leaves is the noise,
+// correlated over the plant's time constant. At F = 0.5 case 221 (levels) was named
+// parameter_mismatch (LR 3.3 times its threshold, 3 % of the gap closed), at F = 0.9 case 377
+// (PRBS) output_saturation: the LR, the validation BIC and the fixed-lag validation gain count
+// every sample as independent. A fit that matches little of the gap (signature under 0.2) must
+// gain on validation with the automatic lag too.
 struct ProcessNoiseCase {
   int index;
+  double share;
   const char* was;
 };
 class GapProcessNoiseTest : public ::testing::TestWithParam<ProcessNoiseCase> {};
@@ -512,7 +514,7 @@ TEST_P(GapProcessNoiseTest, ALoadDisturbanceThePlantColoursIsNotAnEffect) {
   std::mt19937_64 rng(BenchCaseSeed(2001, GetParam().index));
   GapCaseOptions options;
   options.offsets = true;
-  options.process_noise = 0.9;
+  options.process_noise = GetParam().share;
   const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
   const GapReport report = DiagnoseOnOneThread(c);
   const std::string was_note = Ranked(report, EffectFromName(GetParam().was)).note;
@@ -524,8 +526,8 @@ TEST_P(GapProcessNoiseTest, ALoadDisturbanceThePlantColoursIsNotAnEffect) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Seed2001, GapProcessNoiseTest,
-                         ::testing::Values(ProcessNoiseCase{221, "parameter_mismatch"},
-                                           ProcessNoiseCase{377, "output_saturation"}),
+                         ::testing::Values(ProcessNoiseCase{221, 0.5, "parameter_mismatch"},
+                                           ProcessNoiseCase{377, 0.9, "output_saturation"}),
                          [](const auto& info) { return "case" + std::to_string(info.param.index); });
 
 TEST(GapProcessNoiseTest, AFrictionThatReproducesASlowGapIsKeptThoughItsGainIsAsSlow) {
@@ -534,8 +536,7 @@ TEST(GapProcessNoiseTest, AFrictionThatReproducesASlowGapIsKeptThoughItsGainIsAs
   // the input (a friction's sign(v) is not linear in u), and the friction's validation gain with
   // the automatic lag is z 2.08, under the threshold, because it is as slow as what it removes —
   // but the friction reproduces the gap (signature 0.998; validation NRMSE 1.69 for G0, 0.41 for
-  // the refit, 0.027 with the friction) and is
-  // not a fit to the noise.
+  // the refit, 0.027 with the friction) and is not a fit to the noise.
   std::mt19937_64 rng(BenchCaseSeed(44, 21));
   GapCaseOptions options;
   options.offsets = true;
@@ -548,7 +549,7 @@ TEST(GapProcessNoiseTest, AFrictionThatReproducesASlowGapIsKeptThoughItsGainIsAs
               report.verdict.effect.c_str(), friction.signature, report.verdict.nrmse_before,
               friction.nrmse_after, LastNoteWith(report, "does not follow the input").c_str());
   EXPECT_EQ(report.verdict.effect, "coulomb_friction");
-  EXPECT_GE(friction.signature, 0.5);
+  EXPECT_GE(friction.signature, 0.2);
   EXPECT_EQ(friction.note.find("set aside"), std::string::npos) << friction.note;
 }
 
