@@ -284,8 +284,8 @@ TEST(GapDiagnosisTest, AnEchoNoEffectExplainsIsUnexplainedNotNone) {
 // named as a disturbance. The same hum on a delay case leaves the delay named: first at stop 36
 // (CI's machine), but on an AMD EPYC with AVX-512 (stop 37, stop 36's code as well) a pair comes
 // first whose resonance sits at the hum's frequency (144.6 rad/s, ζ 0.0015: its free response,
-// fitted per record, decays to 0.5 % by the record's end, so the "dies out within the record"
-// rule lets it stand); the delay is then its second effect. Asserted: the delay is named.
+// fitted per record, carries the hum; G0's residual follows the input — the delay — so the
+// disturbance rules do not apply); the delay is then its second effect. Asserted: it is named.
 TEST(GapDiagnosisTest, MainsHumIsADisturbanceNotUnmodelledDynamics) {
   const double kPi = 3.14159265358979323846;
   auto add_hum = [&](GapCase& c) {
