@@ -24,6 +24,17 @@ Eigen::VectorXd NoiseOf(const GapCase& c) {
   return c.estimation.y - lin - Eigen::VectorXd::Constant(lin.size(), dc * c.input_offset + c.output_offset);
 }
 
+// Mean square and lag-1 autocorrelation of a noise sequence, about zero (centre it first for
+// moments about its mean).
+struct NoiseMoments {
+  double variance, lag1;
+};
+NoiseMoments MomentsOf(const Eigen::VectorXd& e) {
+  const long n = e.size();
+  const double var = e.squaredNorm() / n;
+  return {var, e.head(n - 1).dot(e.tail(n - 1)) / (n - 1) / var};
+}
+
 TEST(GapBenchTest, OffsetsShiftALinearRigByTheSteadyStateOfTheActuatorOffsetAndTheSensorOffset) {
   for (uint64_t seed = 1; seed <= 3; ++seed) {
     std::mt19937_64 rng(seed);
@@ -35,8 +46,7 @@ TEST(GapBenchTest, OffsetsShiftALinearRigByTheSteadyStateOfTheActuatorOffsetAndT
     const double u_peak = c.estimation.u.cwiseAbs().maxCoeff();
     EXPECT_LE(std::abs(c.input_offset), 0.3 * u_peak + 1e-12);
     EXPECT_GT(std::abs(c.output_offset), 0.0);
-    const Eigen::VectorXd e = NoiseOf(c);
-    const double rms = std::sqrt(e.squaredNorm() / e.size());
+    const double rms = std::sqrt(MomentsOf(NoiseOf(c)).variance);
     EXPECT_NEAR(rms, c.noise_sigma, 0.15 * c.noise_sigma) << "seed " << seed;
     // The sensor offset is a sizeable share of the output's range.
     const double range = c.estimation.y.maxCoeff() - c.estimation.y.minCoeff();
@@ -81,12 +91,9 @@ TEST(GapBenchTest, ColouredNoiseHasTheRequestedPoleAndTheSameVariance) {
     options.offsets = true;
     options.noise_pole = a;
     const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
-    const Eigen::VectorXd e = NoiseOf(c);
-    const long n = e.size();
-    const double var = e.squaredNorm() / n;
-    const double lag1 = e.head(n - 1).dot(e.tail(n - 1)) / (n - 1) / var;
-    EXPECT_NEAR(std::sqrt(var), c.noise_sigma, (a > 0.8 ? 0.1 : 0.05) * c.noise_sigma) << "pole " << a;
-    EXPECT_NEAR(lag1, a, 0.03) << "pole " << a;
+    const NoiseMoments m = MomentsOf(NoiseOf(c));
+    EXPECT_NEAR(std::sqrt(m.variance), c.noise_sigma, (a > 0.8 ? 0.1 : 0.05) * c.noise_sigma) << "pole " << a;
+    EXPECT_NEAR(m.lag1, a, 0.03) << "pole " << a;
   }
 }
 
@@ -104,13 +111,10 @@ TEST(GapBenchTest, ProcessNoiseSplitsTheVarianceAndIsColouredByThePlant) {
       options.process_noise = f;
       const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
       const Eigen::VectorXd e = NoiseOf(c);
-      const Eigen::VectorXd centred = e.array() - e.mean();
-      const long n = e.size();
-      const double var = centred.squaredNorm() / n;
-      const double lag1 = centred.head(n - 1).dot(centred.tail(n - 1)) / (n - 1) / var;
-      EXPECT_NEAR(std::sqrt(var), c.noise_sigma, 0.15 * c.noise_sigma) << "share " << f << ", seed " << seed;
-      EXPECT_GT(lag1, std::exp(-0.15) * f - 0.03) << "share " << f << ", seed " << seed;
-      EXPECT_LT(lag1, f + 0.03) << "share " << f << ", seed " << seed;
+      const NoiseMoments m = MomentsOf(e.array() - e.mean());
+      EXPECT_NEAR(std::sqrt(m.variance), c.noise_sigma, 0.15 * c.noise_sigma) << "share " << f << ", seed " << seed;
+      EXPECT_GT(m.lag1, std::exp(-0.15) * f - 0.03) << "share " << f << ", seed " << seed;
+      EXPECT_LT(m.lag1, f + 0.03) << "share " << f << ", seed " << seed;
       if (f == 0) {
         GapCaseOptions before;
         before.samples = 20000;
