@@ -218,6 +218,11 @@ double ValidationGainZ(const Eigen::VectorXd& y, const Eigen::VectorXd& y_ref, c
 double NuisanceGainBias(long extra, double validation_mse, long n_val, long nuisance_val);
 // One-sided normal quantile at level `alpha` (z with P(Z > z) = alpha).
 double NormalUpperQuantile(double alpha);
+// Whether a mode decaying at `decay_rate` [1/s] (−Re(s), ζω for a resonance) still has its
+// envelope above 1 % at the end of `horizon_s`: its free response lasts over the record.
+inline bool OutlastsRecord(double decay_rate, double horizon_s) {
+  return !(decay_rate * horizon_s > std::log(100.0));
+}
 
 // Samples scored in the longest of the records (after its warm-up).
 inline long LongestScored(const std::vector<GapRecord>& records) {
@@ -295,6 +300,10 @@ std::vector<std::vector<double>> LinearStarts(const FitContext& ctx, EffectKind 
 // ranking.cc: the likelihood-ratio test, validation MSE/NRMSE/BIC and signature of one fitted
 // candidate; then eligibility, ordering and BIC weights over all of them (best first).
 void ScoreCandidate(const FitContext& ctx, CandidateWork& w);
+// A single candidate's validation gain over its reference (ValidationGainZ): parameter_mismatch
+// over G0 as given, an effect over the refit, less the free gain of its extra nuisance columns.
+// Needs w.fit's validation_mse and nuisance_validation (ScoreCandidate sets them).
+double GainOverReferenceZ(const FitContext& ctx, const CandidateWork& w, bool automatic_lag);
 // Fills w.fit.nuisance_estimation / nuisance_validation (Candidate::NuisanceColumns of w's fit).
 void CountNuisance(const FitContext& ctx, CandidateWork& w);
 // An effect (not none, not parameter_mismatch) may be the verdict: significant, and its change

@@ -613,7 +613,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
   // verdict a delay at 0.072 for a floor of 0.035).
   const double longest_val_s = LongestScored(validation) * ts;
   auto mode_lasts = [&](const Effect& e) {
-    return e.params.size() >= 2 && !(e.params[0] * e.params[1] * longest_val_s > std::log(100.0));
+    return e.params.size() >= 2 && OutlastsRecord(e.params[0] * e.params[1], longest_val_s);
   };
   bool resonance_kept = false;
   if (disturbance_only)

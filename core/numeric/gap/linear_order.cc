@@ -56,7 +56,7 @@ int LastingModes(const TransferFunction& g, double horizon_s) {
   const Eigen::VectorXcd poles = Poles(g);
   int lasting = 0;
   for (long i = 0; i < poles.size(); ++i)
-    if (std::abs(poles(i).imag()) > 1e-9 * std::abs(poles(i)) && !(-poles(i).real() * horizon_s > std::log(100.0)))
+    if (std::abs(poles(i).imag()) > 1e-9 * std::abs(poles(i)) && OutlastsRecord(-poles(i).real(), horizon_s))
       ++lasting;
   return lasting;
 }

@@ -53,6 +53,14 @@ double ValidationGainZ(const Eigen::VectorXd& y, const Eigen::VectorXd& y_ref, c
   return (mean - bias) / std::sqrt(var / n);
 }
 
+double GainOverReferenceZ(const FitContext& ctx, const CandidateWork& w, bool automatic_lag) {
+  const CandidateFit& c = w.fit;
+  const bool mismatch = c.effect.kind == EffectKind::kParameterMismatch;
+  const long extra = mismatch ? 0 : c.nuisance_validation - ctx.refit_nuisance_val;
+  return ValidationGainZ(ctx.y_val, mismatch ? ctx.y0_val : ctx.y_refit_val, w.y_val,
+                         NuisanceGainBias(extra, c.validation_mse, ctx.n_val, c.nuisance_validation), automatic_lag);
+}
+
 double NormalUpperQuantile(double alpha) { return std::sqrt(ChiSquareQuantile(1 - 2 * alpha, 1)); }
 
 double ValidationBic(long n_val, long n_est, double mse, int parameters, long nuisance_val) {
@@ -109,9 +117,7 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w) {
     c.signature = Correlation(w.y_val - y0_val, y_val - y0_val);
   } else {
     c.signature = Correlation(w.y_val - y_refit_val, y_val - y_refit_val);
-    const long extra = c.nuisance_validation - ctx.refit_nuisance_val;
-    c.validation_gain_z = ValidationGainZ(y_val, y_refit_val, w.y_val,
-                                          NuisanceGainBias(extra, c.validation_mse, n_val, c.nuisance_validation));
+    c.validation_gain_z = GainOverReferenceZ(ctx, w, false);
     // At the plain level: the effect has already passed the Bonferroni-corrected LR test on the
     // estimation records; this is an independent confirmation on records it was not fitted to.
     w.gain_significant = c.validation_gain_z > NormalUpperQuantile(options.significance);
@@ -254,10 +260,7 @@ void MaskGainsWithinColouredNoise(const FitContext& ctx, std::vector<CandidateWo
     // Noise-following fits with a signature of 0.20–0.24 pass (process noise at F = 0.9: 2 in 30).
     if (w.fit.signature >= ctx.options->min_signature) continue;
     const bool mismatch = kind == EffectKind::kParameterMismatch;
-    const long extra = mismatch ? 0 : w.fit.nuisance_validation - ctx.refit_nuisance_val;
-    const double z = ValidationGainZ(ctx.y_val, mismatch ? ctx.y0_val : ctx.y_refit_val, w.y_val,
-                                     NuisanceGainBias(extra, w.fit.validation_mse, ctx.n_val, w.fit.nuisance_validation),
-                                     true);
+    const double z = GainOverReferenceZ(ctx, w, true);
     if (z > threshold) continue;
     w.masked = true;
     char line[360];
