@@ -142,6 +142,7 @@ nlohmann::json GapReportToJson(const GapReport& report) {
     verdict["nuisance"]["output_drift"] = drift;
   }
   verdict["fit_scheme"] = v.fit_scheme;
+  if (!v.g0_gap.empty()) verdict["g0_gap"] = v.g0_gap;
   if (v.linear_order > 0) {
     verdict["linear_order"] = v.linear_order;
     verdict["linear_nrmse_after"] = v.linear_nrmse_after;

@@ -186,6 +186,12 @@ struct GapVerdict {
   double linear_nrmse_after = 0; // unmodelled_dynamics: validation NRMSE with that linear part
   std::string fit_scheme;        // "single_shooting" or "multiple_shooting"
   long shooting_segment = 0;     // samples per segment when multiple shooting
+  bool integrating = false;      // G0 integrates: every candidate fits an actuator offset
+  // What G0 leaves on the validation records: "within_noise" (within the noise floor),
+  // "follows_input" (above it and explained by past inputs: the prewhitened test),
+  // "does_not_follow_input" (above it, not explained: a disturbance or coloured noise); empty
+  // when the floor could not be estimated without the candidates.
+  std::string g0_gap;
   std::string explanation;
 };
 
