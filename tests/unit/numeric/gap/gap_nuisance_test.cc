@@ -551,13 +551,37 @@ TEST(GapProcessNoiseTest, AFrictionThatReproducesASlowGapIsKeptThoughItsGainIsAs
   EXPECT_EQ(report.verdict.effect, "coulomb_friction");
   EXPECT_GE(friction.signature, 0.2);
   EXPECT_EQ(friction.note.find("set aside"), std::string::npos) << friction.note;
-  // Its gap does not follow the input, so it is diagnosed again with segments half as long (the
-  // rule for a load disturbance's walk, GapIntegratingProcessNoiseTest): the friction is named
-  // there too, so it does not rest on the longer segments, and the first diagnosis stands.
+  // Its gap does not follow the input, but the friction matches the gap: the check on shorter
+  // segments for a load disturbance's walk (GapIntegratingProcessNoiseTest) is not run.
   EXPECT_EQ(report.verdict.g0_gap, "does_not_follow_input");
   EXPECT_EQ(report.verdict.shooting_segment, 500);
-  const std::string again = LastNoteWith(report, "diagnosed again with segments of 250");
-  EXPECT_NE(again.find("they name coulomb_friction"), std::string::npos) << again;
+  EXPECT_EQ(LastNoteWith(report, "diagnosed again with segments of"), "");
+}
+
+TEST(GapProcessNoiseTest, AGainErrorThatMatchesTheGapIsNotCheckedOnShorterSegments) {
+  // `idrig gap bench --cases 26 --seed 83 --offsets --integrating --noise-pole 0.7`, case 14: a
+  // parameter mismatch on an integrating rig under a PRBS, coloured output noise. Its gap (ramps
+  // of the wrong slope) does not follow the input by the prewhitened test, which has little power
+  // for a slow residual; the refit matches it (signature 0.37) and takes the validation NRMSE
+  // from 0.034 to 0.032. On segments of 250 samples the free states take the ramps themselves and
+  // nothing is named, so the check for a walk, were it run on such a fit, would have lost it.
+  std::mt19937_64 rng(BenchCaseSeed(83, 14));
+  GapCaseOptions options;
+  options.offsets = true;
+  options.integrating = true;
+  options.noise_pole = 0.7;
+  const GapCase c = MakeGapCase(BenchCaseTruth(14, 0).front(), rng, options);
+  ASSERT_EQ(c.truth, EffectKind::kParameterMismatch);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const CandidateFit& refit = Ranked(report, EffectKind::kParameterMismatch);
+  std::printf("gain error on an integrating rig: verdict %s, G0's gap %s, signature %.3f, segment %ld\n",
+              report.verdict.effect.c_str(), report.verdict.g0_gap.c_str(), refit.signature,
+              report.verdict.shooting_segment);
+  EXPECT_EQ(report.verdict.effect, "parameter_mismatch");
+  EXPECT_EQ(report.verdict.g0_gap, "does_not_follow_input");
+  EXPECT_GE(refit.signature, 0.2);
+  EXPECT_EQ(report.verdict.shooting_segment, 500);
+  EXPECT_EQ(LastNoteWith(report, "diagnosed again with segments of"), "");
 }
 
 // An integrating rig under process noise (`idrig gap bench --cases 20 --seed 2002 --only none
@@ -565,9 +589,10 @@ TEST(GapProcessNoiseTest, AFrictionThatReproducesASlowGapIsKeptThoughItsGainIsAs
 // state of each 500-sample shooting segment takes only at the segment's start. Case 78 (levels)
 // was named sensor_nonlinearity (LR 53 against 14, validation gain z 6.5 with the automatic lag,
 // at 7 of the 8 validation segments), case 195 (random binary) the same with G0 already within
-// the noise floor. G0's gap there does not follow the input or is within the floor: the records
-// are diagnosed again with segments of 250 samples, where the walk within a segment is smaller,
-// and nothing is named there, so that diagnosis stands.
+// the noise floor. G0's gap there does not follow the input or is within the floor, and the sensor
+// map matches little of it (signature 0.17, 0.16): the records are diagnosed again with segments of
+// 250 samples, where the walk within a segment is smaller, and nothing is named there, so that
+// diagnosis stands.
 class GapIntegratingProcessNoiseTest : public ::testing::TestWithParam<int> {};
 
 TEST_P(GapIntegratingProcessNoiseTest, AWalkWithinTheShootingSegmentsIsNotAnEffect) {
