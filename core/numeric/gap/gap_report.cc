@@ -954,6 +954,8 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const std::vector<GapRecord> validation =
       options.bridge_glitches ? BridgeGlitches(validation_raw, "validation", bridged) : validation_raw;
   GapReport first = DiagnoseGapOnce(sim_model, estimation, validation, options, bridged);
+  const double ts = estimation.front().sample_time;
+  const int order = ContinuousSimModel(sim_model, ts).Order();
   // A load disturbance on an integrating or lightly damped rig (process noise, a varying load)
   // integrates into a walk that the free state of each shooting segment takes only at the
   // segment's start; what is left within a segment is slow, and a sensor map's y² and y³ or the
@@ -976,7 +978,6 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   GapOptions used = options;
   {
     const GapVerdict& v = first.verdict;
-    const long order = ContinuousSimModel(sim_model, estimation.front().sample_time).Order();
     const long halved = v.shooting_segment / 2;
     if (options.fixed_segment < 0 && v.fit_scheme == "multiple_shooting" &&
         halved >= kShortestSegmentPerOrder * (order + 1) &&
@@ -1013,8 +1014,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   if (!options.find_sensor_steps || v.effect == "none" || v.effect == "unexplained" || v.plant.den.size() == 0 ||
       !(v.nrmse_after > kStepSearchAboveFloor * v.noise_nrmse))
     return first;
-  const double ts = estimation.front().sample_time;
-  const long min_samples = std::max(20, 10 * (ContinuousSimModel(sim_model, ts).Order() + 4));
+  const long min_samples = std::max(20, 10 * (order + 4));
   const double du = v.nuisance.input_offset_fitted ? v.nuisance.input_offset : 0.0;
   const auto diagnosed = [&](const GapRecord& r) {
     EffectSimulationOptions sim;
