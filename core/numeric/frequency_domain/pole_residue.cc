@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/numeric/model/lti_model.h"
+
 namespace idrig {
 
 namespace {
@@ -444,12 +446,6 @@ PoleResidueResult FitPoleResidue(const Frf& frf, const PoleResidueOptions& optio
 }
 
 TransferFunction PoleResidueTransferFunction(const PoleResidueResult& result) {
-  auto multiply = [](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-    Eigen::VectorXd c = Eigen::VectorXd::Zero(a.size() + b.size() - 1);
-    for (int i = 0; i < a.size(); ++i)
-      for (int j = 0; j < b.size(); ++j) c(i + j) += a(i) * b(j);
-    return c;
-  };
   auto add = [](Eigen::VectorXd a, Eigen::VectorXd b) {  // descending, aligned at the end
     if (a.size() < b.size()) std::swap(a, b);
     a.tail(b.size()) += b;
@@ -463,8 +459,8 @@ TransferFunction PoleResidueTransferFunction(const PoleResidueResult& result) {
     // a/(p−s) + ā/(p−s̄) = (2 Re a · p − 2 Re(a s̄)) / (p² − 2 Re s · p + |s|²)
     const Eigen::Vector2d num(2.0 * a.real(), -2.0 * std::real(a * std::conj(s)));
     const Eigen::Vector3d den(1.0, -2.0 * s.real(), std::norm(s));
-    tf.num = add(multiply(tf.num, den), multiply(num, tf.den));
-    tf.den = multiply(tf.den, den);
+    tf.num = add(PolynomialProduct(tf.num, den), PolynomialProduct(num, tf.den));
+    tf.den = PolynomialProduct(tf.den, den);
   }
   tf.num = add(tf.num, result.origin_correction.real() * tf.den);
   return tf;

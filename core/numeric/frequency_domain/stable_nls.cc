@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/numeric/model/lti_model.h"
+
 namespace idrig {
 
 namespace {
@@ -209,12 +211,6 @@ StableNlsResult FitStableNls(const Frf& frf, const StableNlsOptions& options) {
 
   // Assemble the transfer function in p (descending powers), monic denominator.
   Eigen::VectorXd num_poly = Eigen::VectorXd::Constant(1, x(0)), den_poly = Eigen::VectorXd::Ones(1);
-  auto multiply = [](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-    Eigen::VectorXd c = Eigen::VectorXd::Zero(a.size() + b.size() - 1);
-    for (int i = 0; i < a.size(); ++i)
-      for (int j = 0; j < b.size(); ++j) c(i + j) += a(i) * b(j);
-    return c;
-  };
   int i = 1;
   for (const auto& s : layout.sections) {
     const double a = Functor::Coef(x(i), s.squared) / ws;
@@ -224,7 +220,7 @@ StableNlsResult FitStableNls(const Frf& frf, const StableNlsOptions& options) {
     } else {
       f = Eigen::Vector2d(a, 1.0);
     }
-    if (s.numerator) num_poly = multiply(num_poly, f); else den_poly = multiply(den_poly, f);
+    if (s.numerator) num_poly = PolynomialProduct(num_poly, f); else den_poly = PolynomialProduct(den_poly, f);
     i += s.quadratic ? 2 : 1;
   }
   const double lead = den_poly(0);

@@ -45,7 +45,7 @@ bool Compatible(EffectKind a, EffectKind b) {
 struct SecondEffectTest {
   double lr = 0, threshold = 0, signature = 0, gain_z = 0, gain_threshold = 0;
   bool Passes(const GapOptions& options) const {
-    return lr > threshold && (signature >= options.min_signature || gain_z > gain_threshold);
+    return PassesEffectRule(options, lr > threshold, signature, gain_z > gain_threshold);
   }
 };
 SecondEffectTest TestSecondEffect(const FitContext& ctx, const CandidateWork& one, const CandidateWork& two) {

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "core/numeric/model/lti_model.h"
+
 namespace idrig {
 namespace {
 
@@ -236,12 +238,7 @@ void ValidateEffect(const Effect& effect) {
 TransferFunction ApplyLinearEffect(const TransferFunction& plant, const Effect& effect) {
   TransferFunction g = plant;
   const auto& p = effect.params;
-  auto multiply_den = [&g](const Eigen::VectorXd& factor) {
-    Eigen::VectorXd den = Eigen::VectorXd::Zero(g.den.size() + factor.size() - 1);
-    for (int i = 0; i < g.den.size(); ++i)
-      for (int j = 0; j < factor.size(); ++j) den(i + j) += g.den(i) * factor(j);
-    g.den = den;
-  };
+  auto multiply_den = [&g](const Eigen::VectorXd& factor) { g.den = PolynomialProduct(g.den, factor); };
   switch (effect.kind) {
     case EffectKind::kTimeDelay:
       g.delay_s += p[0];

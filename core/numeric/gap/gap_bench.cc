@@ -5,6 +5,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "core/numeric/model/lti_model.h"
 #include "core/numeric/signal/excitation.h"
 
 namespace idrig {
@@ -58,9 +59,7 @@ TransferFunction RandomPlant(EffectKind truth, std::mt19937_64& rng, double* ban
     const Eigen::Vector3d m1(1.0, 2 * zeta * omega, omega * omega);
     const Eigen::Vector3d m2(1.0, 2 * zeta2 * omega2, omega2 * omega2);
     TransferFunction tf;
-    tf.den = Eigen::VectorXd::Zero(5);
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) tf.den(i + j) += m1(i) * m2(j);
+    tf.den = PolynomialProduct(m1, m2);
     const double k = gain * omega * omega * omega2 * omega2;
     if (antiresonance)
       tf.num = Eigen::Vector3d(1.0, 2 * 0.5 * zeta * omega_z, omega_z * omega_z) * (k / (omega_z * omega_z));

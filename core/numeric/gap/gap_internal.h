@@ -306,8 +306,11 @@ void ScoreCandidate(const FitContext& ctx, CandidateWork& w);
 double GainOverReferenceZ(const FitContext& ctx, const CandidateWork& w, bool automatic_lag);
 // Fills w.fit.nuisance_estimation / nuisance_validation (Candidate::NuisanceColumns of w's fit).
 void CountNuisance(const FitContext& ctx, CandidateWork& w);
-// An effect (not none, not parameter_mismatch) may be the verdict: significant, and its change
-// matches the gap (signature ≥ min_signature) or gains significantly on validation; not masked.
+// The rule an effect passes, as a single candidate or as the second of a pair: significant on the
+// estimation records, and on validation its change matches the gap (signature ≥ min_signature)
+// or it gains significantly.
+bool PassesEffectRule(const GapOptions& options, bool significant, double signature, bool gain_significant);
+// An effect (not none, not parameter_mismatch) may be the verdict: PassesEffectRule, not masked.
 bool EffectEligible(const GapOptions& options, const CandidateWork& w);
 // Sorts `work` best first (eligible, then validation BIC) and returns the ranking.
 std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const GapOptions& options);

@@ -16,21 +16,11 @@
 #include <vector>
 
 #include "core/numeric/gap/gap_internal.h"
+#include "core/numeric/model/lti_model.h"
 #include "core/numeric/time_domain/subspace.h"
 #include "core/numeric/validation.h"
 
 namespace idrig::gap_detail {
-
-namespace {
-
-Eigen::VectorXd Multiply(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-  Eigen::VectorXd c = Eigen::VectorXd::Zero(a.size() + b.size() - 1);
-  for (int i = 0; i < a.size(); ++i)
-    for (int j = 0; j < b.size(); ++j) c(i + j) += a(i) * b(j);
-  return c;
-}
-
-}  // namespace
 
 namespace {
 
@@ -169,8 +159,8 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
     const double w = share * M_PI / ctx.scales.ts;
     const Eigen::Vector3d p(1.0, w, w * w);
     TransferFunction g = g0n;
-    g.num = Multiply(g.num, p);
-    g.den = Multiply(g.den, p);
+    g.num = PolynomialProduct(g.num, p);
+    g.den = PolynomialProduct(g.den, p);
     char name[64];
     std::snprintf(name, sizeof name, "G0·P/P at %.2f × Nyquist", share);
     starts.emplace_back(name, Normalized(g));
@@ -184,8 +174,8 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
     if (!(c.estimation_mse < ctx.refit_fit.mse)) continue;  // found nothing the refit misses
     TransferFunction g = ApplyLinearEffect(Normalized(c.plant), c.effect);
     if (g.Order() > order || g.num.size() - 1 > num_degree || g.delay_s != ctx.g0->delay_s) continue;
-    while (g.Order() < order) g.den = Multiply(g.den, high);
-    while (g.num.size() - 1 < num_degree) g.num = Multiply(g.num, high);
+    while (g.Order() < order) g.den = PolynomialProduct(g.den, high);
+    while (g.num.size() - 1 < num_degree) g.num = PolynomialProduct(g.num, high);
     starts.emplace_back(std::string("the fitted ") + EffectName(c.effect.kind), Normalized(g));
   }
   if (const std::optional<TransferFunction> g = SubspaceStart(ctx, order, num_degree))

@@ -273,8 +273,12 @@ void MaskGainsWithinColouredNoise(const FitContext& ctx, std::vector<CandidateWo
   }
 }
 
+bool PassesEffectRule(const GapOptions& options, bool significant, double signature, bool gain_significant) {
+  return significant && (signature >= options.min_signature || gain_significant);
+}
+
 bool EffectEligible(const GapOptions& options, const CandidateWork& w) {
-  return w.fit.significant && !w.masked && (w.fit.signature >= options.min_signature || w.gain_significant);
+  return !w.masked && PassesEffectRule(options, w.fit.significant, w.fit.signature, w.gain_significant);
 }
 
 std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const GapOptions& options) {

@@ -151,6 +151,13 @@ Eigen::VectorXcd PolynomialRoots(const Eigen::VectorXd& descending) {
   return Eigen::EigenSolver<Eigen::MatrixXd>(companion, false).eigenvalues();
 }
 
+Eigen::VectorXd PolynomialProduct(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  if (a.size() == 0 || b.size() == 0) return Eigen::VectorXd();
+  Eigen::VectorXd c = Eigen::VectorXd::Zero(a.size() + b.size() - 1);
+  for (int i = 0; i < a.size(); ++i) c.segment(i, b.size()) += a(i) * b;
+  return c;
+}
+
 Eigen::VectorXd PolynomialFromRoots(const Eigen::VectorXcd& roots) {
   Eigen::VectorXcd p = Eigen::VectorXcd::Zero(roots.size() + 1);
   p(0) = 1.0;

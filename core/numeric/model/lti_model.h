@@ -53,6 +53,7 @@ TransferFunction ToTransferFunction(const StateSpace& ss, int output = 0, int in
 // Polynomial helpers (descending coefficients).
 Eigen::VectorXcd PolynomialRoots(const Eigen::VectorXd& descending);
 Eigen::VectorXd PolynomialFromRoots(const Eigen::VectorXcd& roots);  // monic, real part kept
+Eigen::VectorXd PolynomialProduct(const Eigen::VectorXd& a, const Eigen::VectorXd& b);  // a·b (a convolution)
 std::complex<double> PolyVal(const Eigen::VectorXd& descending, std::complex<double> x);
 
 Eigen::VectorXcd Poles(const TransferFunction& tf);

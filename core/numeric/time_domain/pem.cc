@@ -6,6 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/numeric/model/lti_model.h"
 #include "core/numeric/time_domain/pem_internal.h"
 #include "core/numeric/validation.h"
 
@@ -50,7 +51,7 @@ Evaluation Evaluate(const Layout& layout, const Eigen::VectorXd& theta, const Ei
     for (int k = 1; k <= layout.na; ++k) jac.col(k - 1) = Shifted(yt, k);
   }
   for (int j = 0; j < layout.nu; ++j) {
-    const Eigen::VectorXd cf = Convolve(p.c, p.f[j]);
+    const Eigen::VectorXd cf = PolynomialProduct(p.c, p.f[j]);
     const Eigen::VectorXd ut = FilterPolynomial(p.d, cf, ushift.col(j));
     for (int k = 0; k < layout.nb; ++k) jac.col(layout.B(j) + k) = -Shifted(ut, k);
     if (layout.nf > 0) {
@@ -138,7 +139,7 @@ Refinement Refine(const Layout& layout, Eigen::VectorXd theta, const Eigen::Vect
 // G_j(z) = z^{−nk} B_j / (A F_j) as a discrete transfer function in descending powers of z,
 // one sample of delay kept in the polynomials and the rest in delay_s.
 TransferFunction InputTf(const Polys& p, int j, int nk, double ts) {
-  const Eigen::VectorXd den_q = Convolve(p.a, p.f[j]);
+  const Eigen::VectorXd den_q = PolynomialProduct(p.a, p.f[j]);
   const int s = std::min(nk, 1);
   const int nb = static_cast<int>(p.b[j].size());
   const int degree = std::max<int>(static_cast<int>(den_q.size()) - 1, s + nb - 1);
@@ -296,7 +297,7 @@ Eigen::VectorXd SimulatePem(const PemResult& result, const Eigen::MatrixXd& u) {
   p.f = result.f;
   Eigen::VectorXd y = Eigen::VectorXd::Zero(u.rows());
   for (int j = 0; j < u.cols(); ++j)
-    y += FilterPolynomial(p.b[j], Convolve(p.a, p.f[j]), Shifted(u.col(j), result.input_delay));
+    y += FilterPolynomial(p.b[j], PolynomialProduct(p.a, p.f[j]), Shifted(u.col(j), result.input_delay));
   return y;
 }
 

@@ -24,7 +24,6 @@ struct Polys {
 
 Polys Unpack(const Layout& layout, const Eigen::VectorXd& theta);
 Eigen::VectorXd Pack(const Layout& layout, const Polys& polys);
-Eigen::VectorXd Convolve(const Eigen::VectorXd& p, const Eigen::VectorXd& q);
 // x(t − k), zero before the start.
 Eigen::VectorXd Shifted(const Eigen::VectorXd& x, int k);
 // Monic polynomial (ascending q⁻¹) with every root inside the unit circle.

@@ -8,12 +8,6 @@
 
 namespace idrig::pem_internal {
 
-Eigen::VectorXd Convolve(const Eigen::VectorXd& p, const Eigen::VectorXd& q) {
-  Eigen::VectorXd out = Eigen::VectorXd::Zero(p.size() + q.size() - 1);
-  for (int i = 0; i < p.size(); ++i) out.segment(i, q.size()) += p(i) * q;
-  return out;
-}
-
 Eigen::VectorXd Shifted(const Eigen::VectorXd& x, int k) {
   Eigen::VectorXd out = Eigen::VectorXd::Zero(x.size());
   if (k < x.size()) out.tail(x.size() - k) = x.head(x.size() - k);

@@ -13,6 +13,7 @@
 
 #include "core/numeric/gap/gap_bench.h"
 #include "core/numeric/gap/gap_diagnosis.h"
+#include "core/numeric/model/lti_model.h"
 
 namespace idrig {
 namespace {
@@ -31,12 +32,6 @@ GapCase SecondOrderLevelsCase(uint64_t seed, int samples) {
 
 double Rms(const Eigen::VectorXd& v) { return std::sqrt(v.squaredNorm() / v.size()); }
 
-Eigen::VectorXd Multiply(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-  Eigen::VectorXd c = Eigen::VectorXd::Zero(a.size() + b.size() - 1);
-  for (int i = 0; i < a.size(); ++i)
-    for (int j = 0; j < b.size(); ++j) c(i + j) += a(i) * b(j);
-  return c;
-}
 
 void PrintReport(const GapReport& report) {
   const GapVerdict& v = report.verdict;
@@ -65,8 +60,8 @@ Rig TwoMassRig(uint64_t seed, double wz_over_w0 = 1.3) {
   const double w0 = std::sqrt(g0.den(2) / g0.den(0));
   const double wz = wz_over_w0 * w0, wp = 2.0 * w0, zeta = 0.08;
   rig.real = g0;
-  rig.real.num = Multiply(g0.num, Eigen::Vector3d(1.0, 2 * zeta * wz, wz * wz)) * (wp * wp / (wz * wz));
-  rig.real.den = Multiply(g0.den, Eigen::Vector3d(1.0, 2 * zeta * wp, wp * wp));
+  rig.real.num = PolynomialProduct(g0.num, Eigen::Vector3d(1.0, 2 * zeta * wz, wz * wz)) * (wp * wp / (wz * wz));
+  rig.real.den = PolynomialProduct(g0.den, Eigen::Vector3d(1.0, 2 * zeta * wp, wp * wp));
   return rig;
 }
 

@@ -67,6 +67,27 @@ TEST(LtiModel, ContinuousImpulseSamplesAreClosedForm) {
   }
 }
 
+TEST(LtiModel, PolynomialProductIsThePolynomialOfBothRootSets) {
+  // (s + 2)(s² + 2s + 5) = s³ + 4s² + 9s + 10, by hand; and the product of two monic polynomials
+  // built from roots is the one built from the union of the roots.
+  const Eigen::VectorXd p = PolynomialProduct(Eigen::Vector2d(1, 2), Eigen::Vector3d(1, 2, 5));
+  ASSERT_EQ(p.size(), 4);
+  EXPECT_DOUBLE_EQ(p(0), 1);
+  EXPECT_DOUBLE_EQ(p(1), 4);
+  EXPECT_DOUBLE_EQ(p(2), 9);
+  EXPECT_DOUBLE_EQ(p(3), 10);
+  using C = std::complex<double>;
+  Eigen::VectorXcd a(3), b(2), both(5);
+  a << C(-1, 3), C(-1, -3), C(-0.5, 0);
+  b << C(-7, 0), C(2, 0);
+  both << a, b;
+  const Eigen::VectorXd direct = PolynomialFromRoots(both);
+  const Eigen::VectorXd product = PolynomialProduct(PolynomialFromRoots(a), PolynomialFromRoots(b));
+  ASSERT_EQ(product.size(), direct.size());
+  for (int i = 0; i < direct.size(); ++i) EXPECT_NEAR(product(i), direct(i), 1e-12 * (1 + std::abs(direct(i))));
+  EXPECT_EQ(PolynomialProduct(Eigen::VectorXd(), Eigen::Vector2d(1, 1)).size(), 0);
+}
+
 TEST(LtiModel, ZohOfAHighOrderModelAtAHighSampleRateIsExact) {
   // Sixth order at 51.2 kHz (the Wiener–Hammerstein benchmark's rate): denominator
   // coefficients up to 1e25, where the matrix exponential of the companion realisation without
