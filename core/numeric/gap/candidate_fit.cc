@@ -13,12 +13,8 @@
 
 namespace idrig::gap_detail {
 
-namespace {
-
-double Pos(double v) { return std::exp(std::clamp(v, -30.0, 30.0)); }
-
-// The plant's delay-free sampled realisation (zero-order hold): one discretisation per prediction,
-// shared by its free response, its settled direction and a rounded delay line. Order 0: no states.
+// One discretisation per prediction, shared by the free response, the settled direction and a
+// rounded delay line (gap_internal.h).
 StateSpace SampledUndelayed(const TransferFunction& plant, double ts) {
   TransferFunction g = plant;
   g.delay_s = 0;
@@ -26,7 +22,6 @@ StateSpace SampledUndelayed(const TransferFunction& plant, double ts) {
   return DiscretizeZoh(ToStateSpace(g), ts);
 }
 
-// Free response of the plant's sampled realisation d (SampledUndelayed): row k = C A^k, n rows.
 Eigen::MatrixXd FreeResponse(const StateSpace& d, long n) {
   if (d.A.rows() == 0) return Eigen::MatrixXd(n, 0);
   Eigen::MatrixXd f(n, d.A.rows());
@@ -44,6 +39,21 @@ Eigen::MatrixXd FreeResponse(const StateSpace& d, long n) {
   }
   return f;
 }
+
+std::vector<std::pair<long, long>> Segments(const GapRecord& record, long segment) {
+  const long first = record.score_from, total = record.y.size() - first;
+  const long count = segment > 0 ? std::max<long>(1, total / segment) : 1;
+  std::vector<std::pair<long, long>> out;
+  for (long j = 0; j < count; ++j) {
+    const long start = first + j * total / count;
+    out.emplace_back(start, first + (j + 1) * total / count - start);
+  }
+  return out;
+}
+
+namespace {
+
+double Pos(double v) { return std::exp(std::clamp(v, -30.0, 30.0)); }
 
 // The input a delayed plant's line holds at the start of a record. The rig ran before the
 // record began, so over the first d samples (d = the whole-sample delay) the plant is driven by
@@ -182,19 +192,6 @@ Eigen::MatrixXd SensorColumns(const GapRecord& record, long start, long len, boo
     for (long k = 0; k < len; ++k) x(k, 0) = (k - 0.5 * (len - 1)) * record.sample_time;
   for (size_t i = 0; i < steps.size(); ++i) x.col((drift ? 1 : 0) + static_cast<long>(i)).tail(len - steps[i]).setOnes();
   return x;
-}
-
-// The shooting segments of a record's scored samples, as (start, length): one, or every
-// `segment` samples (the remainder spread over them).
-std::vector<std::pair<long, long>> Segments(const GapRecord& record, long segment) {
-  const long first = record.score_from, total = record.y.size() - first;
-  const long count = segment > 0 ? std::max<long>(1, total / segment) : 1;
-  std::vector<std::pair<long, long>> out;
-  for (long j = 0; j < count; ++j) {
-    const long start = first + j * total / count;
-    out.emplace_back(start, first + (j + 1) * total / count - start);
-  }
-  return out;
 }
 
 long Longest(const std::vector<std::pair<long, long>>& segments) {

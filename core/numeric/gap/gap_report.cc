@@ -635,6 +635,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
                    "plant acts through the input (its free response could reproduce an output disturbance)";
     }
   if (disturbance_only) MaskGainsWithinColouredNoise(ctx, work);
+  MaskLinearEffectsAtTheirIdentity(ctx, work);
   report.ranking = RankCandidates(work, options);
   const double y_val_spread = (y_val.array() - y_val.mean()).matrix().norm() / std::sqrt(double(n_val));
 
@@ -897,6 +898,14 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
                   "no effect of the library and no linear part of order %d explains it: a missing input, an "
                   "effect outside the library, or a sim model of another structure",
                   v.nrmse_after, noise_nrmse, g0.Order() + 2);
+    v.explanation = line;
+  } else if (v.effect == "none" && v.g0_gap == "does_not_follow_input") {
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "no effect of the plant: what G0 leaves on the validation records (NRMSE %.4g, floor %.4g) "
+                  "does not follow the input — an output disturbance or coloured noise, which no candidate "
+                  "explains better than noise",
+                  v.nrmse_before, noise_nrmse);
     v.explanation = line;
   } else if (v.effect == "none")
     v.explanation = "no candidate explains the gap better than noise: G0 fits within the noise";

@@ -273,6 +273,24 @@ void MaskGainsWithinColouredNoise(const FitContext& ctx, std::vector<CandidateWo
   }
 }
 
+void MaskLinearEffectsAtTheirIdentity(const FitContext& ctx, std::vector<CandidateWork>& work) {
+  const double ts = ctx.scales.ts;
+  for (auto& w : work) {
+    const EffectKind kind = w.fit.effect.kind;
+    if (w.masked || w.fit.effects.size() > 1 || (kind != EffectKind::kActuatorLag && kind != EffectKind::kTimeDelay) ||
+        w.fit.effect.params.empty() || !(w.fit.effect.params[0] < kIdentityShareOfTs * ts))
+      continue;
+    const bool lag = kind == EffectKind::kActuatorLag;
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "set aside: fitted to no %s at all (%s = %.3g s, under %.2g of the sample time %.3g s): "
+                  "its plant is the refit's from another start, not an effect",
+                  lag ? "lag" : "delay", lag ? "T" : "tau", w.fit.effect.params[0], kIdentityShareOfTs, ts);
+    w.masked = true;
+    w.fit.note = line;
+  }
+}
+
 bool PassesEffectRule(const GapOptions& options, bool significant, double signature, bool gain_significant) {
   return significant && (signature >= options.min_signature || gain_significant);
 }

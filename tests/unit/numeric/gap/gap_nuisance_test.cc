@@ -523,6 +523,10 @@ TEST_P(GapProcessNoiseTest, ALoadDisturbanceThePlantColoursIsNotAnEffect) {
   EXPECT_EQ(report.verdict.effect, "none");
   EXPECT_NE(LastNoteWith(report, "does not follow the input"), "");
   EXPECT_NE(was_note.find("not significant once the residual's correlation is counted"), std::string::npos) << was_note;
+  // The explanation does not say that G0 fits within the noise: its gap is above the floor.
+  EXPECT_EQ(report.verdict.g0_gap, "does_not_follow_input");
+  EXPECT_NE(report.verdict.explanation.find("does not follow the input"), std::string::npos)
+      << report.verdict.explanation;
 }
 
 INSTANTIATE_TEST_SUITE_P(Seed2001, GapProcessNoiseTest,
@@ -558,6 +562,37 @@ TEST(GapProcessNoiseTest, AFrictionThatReproducesASlowGapIsKeptThoughItsGainIsAs
   EXPECT_EQ(LastNoteWith(report, "diagnosed again with segments of"), "");
 }
 
+// Case `index` of `idrig gap bench --seed SEED --offsets --integrating --noise-pole POLE`.
+GapCase IntegratingColouredNoiseCase(uint64_t seed, int index, double noise_pole) {
+  std::mt19937_64 rng(BenchCaseSeed(seed, index));
+  GapCaseOptions options;
+  options.offsets = true;
+  options.integrating = true;
+  options.noise_pole = noise_pole;
+  return MakeGapCase(BenchCaseTruth(index, 0).front(), rng, options);
+}
+
+TEST(GapColouredNoiseTest, ALagFittedToNothingIsNotNamed) {
+  // `idrig gap bench --cases 26 --seed 84 --offsets --integrating --noise-pole 0.9`, case 0: no
+  // effect, coloured output noise on an integrating rig. The actuator_lag candidate fitted
+  // T = 2.8e-14 s (no lag at all) with a plant better than the refit's own fit, and at signature
+  // 0.29 over the refit it was named. A lag under a hundredth of the sample time is the refit
+  // from another start: it is set aside, and nothing is named.
+  const GapCase c = IntegratingColouredNoiseCase(84, 0, 0.9);
+  ASSERT_EQ(c.truth, EffectKind::kNone);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const CandidateFit& lag = Ranked(report, EffectKind::kActuatorLag);
+  std::printf("none, coloured noise, integrating rig: verdict %s; lag T = %.3g s: %s\n",
+              report.verdict.effect.c_str(), lag.effect.params.empty() ? -1.0 : lag.effect.params[0],
+              lag.note.c_str());
+  EXPECT_EQ(report.verdict.effect, "none");
+  ASSERT_FALSE(lag.effect.params.empty());
+  if (lag.effect.params[0] < 0.01 * c.estimation.sample_time) {
+    EXPECT_FALSE(lag.eligible);
+    EXPECT_NE(lag.note.find("fitted to no lag at all"), std::string::npos) << lag.note;
+  }
+}
+
 TEST(GapProcessNoiseTest, AGainErrorThatMatchesTheGapIsNotCheckedOnShorterSegments) {
   // `idrig gap bench --cases 26 --seed 83 --offsets --integrating --noise-pole 0.7`, case 14: a
   // parameter mismatch on an integrating rig under a PRBS, coloured output noise. Its gap (ramps
@@ -565,12 +600,7 @@ TEST(GapProcessNoiseTest, AGainErrorThatMatchesTheGapIsNotCheckedOnShorterSegmen
   // for a slow residual; the refit matches it (signature 0.37) and takes the validation NRMSE
   // from 0.034 to 0.032. On segments of 250 samples the free states take the ramps themselves and
   // nothing is named, so the check for a walk, were it run on such a fit, would have lost it.
-  std::mt19937_64 rng(BenchCaseSeed(83, 14));
-  GapCaseOptions options;
-  options.offsets = true;
-  options.integrating = true;
-  options.noise_pole = 0.7;
-  const GapCase c = MakeGapCase(BenchCaseTruth(14, 0).front(), rng, options);
+  const GapCase c = IntegratingColouredNoiseCase(83, 14, 0.7);
   ASSERT_EQ(c.truth, EffectKind::kParameterMismatch);
   const GapReport report = DiagnoseOnOneThread(c);
   const CandidateFit& refit = Ranked(report, EffectKind::kParameterMismatch);
