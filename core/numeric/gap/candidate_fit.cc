@@ -53,6 +53,62 @@ std::vector<std::pair<long, long>> Segments(const GapRecord& record, long segmen
 
 namespace {
 
+// Least squares through small normal equations, equilibrated (unit diagonal) and solved by a
+// symmetric eigen-decomposition with a relative cut-off (a minimum-norm solution where the
+// columns are nearly dependent: the fitted values, all that matters here, are then still the
+// projection).
+Eigen::VectorXd EquilibratedSolve(const Eigen::MatrixXd& gram, const Eigen::VectorXd& rhs, long* rank = nullptr) {
+  const long k = gram.rows();
+  Eigen::VectorXd scale = gram.diagonal().cwiseSqrt();
+  for (long i = 0; i < k; ++i) scale(i) = scale(i) > 0 ? 1.0 / scale(i) : 0.0;
+  const Eigen::MatrixXd g = scale.asDiagonal() * gram * scale.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(g);
+  const Eigen::VectorXd lambda = eig.eigenvalues();
+  const double cut = 1e-13 * lambda.cwiseAbs().maxCoeff();
+  const Eigen::VectorXd proj = eig.eigenvectors().transpose() * (scale.asDiagonal() * rhs);
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(k);
+  if (rank) *rank = 0;
+  for (long i = 0; i < k; ++i)
+    if (lambda(i) > cut) {
+      z += eig.eigenvectors().col(i) * (proj(i) / lambda(i));
+      if (rank) ++*rank;
+    }
+  return scale.asDiagonal() * z;
+}
+
+}  // namespace
+
+Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixXd& free_rows, long* rank,
+                                  const Eigen::MatrixXd* extra) {
+  const long len = r.size(), rows = std::min<long>(len, free_rows.rows()), n = free_rows.cols();
+  const long m = extra ? extra->cols() : 0, k = 1 + n + m;
+  Eigen::MatrixXd gram(k, k);
+  Eigen::VectorXd rhs(k);
+  gram(0, 0) = double(len);
+  rhs(0) = r.sum();
+  if (n > 0) {
+    const auto f = free_rows.topRows(rows);
+    gram.block(1, 1, n, n) = f.transpose() * f;
+    gram.block(0, 1, 1, n) = f.colwise().sum();
+    gram.block(1, 0, n, 1) = gram.block(0, 1, 1, n).transpose();
+    rhs.segment(1, n) = f.transpose() * r.head(rows);
+  }
+  if (m > 0) {
+    const Eigen::MatrixXd& x = *extra;
+    gram.block(1 + n, 1 + n, m, m) = x.transpose() * x;
+    gram.block(0, 1 + n, 1, m) = x.colwise().sum();
+    gram.block(1 + n, 0, m, 1) = gram.block(0, 1 + n, 1, m).transpose();
+    if (n > 0) {
+      gram.block(1, 1 + n, n, m) = free_rows.topRows(rows).transpose() * x.topRows(rows);
+      gram.block(1 + n, 1, m, n) = gram.block(1, 1 + n, n, m).transpose();
+    }
+    rhs.tail(m) = x.transpose() * r;
+  }
+  return EquilibratedSolve(gram, rhs, rank);
+}
+
+namespace {
+
 double Pos(double v) { return std::exp(std::clamp(v, -30.0, 30.0)); }
 
 // The input a delayed plant's line holds at the start of a record. The rig ran before the
@@ -123,61 +179,6 @@ Eigen::VectorXd SettledDirection(const StateSpace& d, bool with_line) {
   out.head(n) = x / level;
   if (with_line) out(n) = 1.0 / level;
   return out;
-}
-
-// Least squares through small normal equations, equilibrated (unit diagonal) and solved by a
-// symmetric eigen-decomposition with a relative cut-off (a minimum-norm solution where the
-// columns are nearly dependent: the fitted values, all that matters here, are then still the
-// projection).
-Eigen::VectorXd EquilibratedSolve(const Eigen::MatrixXd& gram, const Eigen::VectorXd& rhs, long* rank = nullptr) {
-  const long k = gram.rows();
-  Eigen::VectorXd scale = gram.diagonal().cwiseSqrt();
-  for (long i = 0; i < k; ++i) scale(i) = scale(i) > 0 ? 1.0 / scale(i) : 0.0;
-  const Eigen::MatrixXd g = scale.asDiagonal() * gram * scale.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(g);
-  const Eigen::VectorXd lambda = eig.eigenvalues();
-  const double cut = 1e-13 * lambda.cwiseAbs().maxCoeff();
-  const Eigen::VectorXd proj = eig.eigenvectors().transpose() * (scale.asDiagonal() * rhs);
-  Eigen::VectorXd z = Eigen::VectorXd::Zero(k);
-  if (rank) *rank = 0;
-  for (long i = 0; i < k; ++i)
-    if (lambda(i) > cut) {
-      z += eig.eigenvectors().col(i) * (proj(i) / lambda(i));
-      if (rank) ++*rank;
-    }
-  return scale.asDiagonal() * z;
-}
-
-// Least squares of r on [1, F] (F = the free response's first rows, zero below them): [b; x0].
-// With `extra` (the sensor's own columns, as long as r: a drift's ramp, a step's level): on
-// [1, F, extra], [b; x0; c].
-Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixXd& free_rows,
-                                  long* rank = nullptr, const Eigen::MatrixXd* extra = nullptr) {
-  const long len = r.size(), rows = std::min<long>(len, free_rows.rows()), n = free_rows.cols();
-  const long m = extra ? extra->cols() : 0, k = 1 + n + m;
-  Eigen::MatrixXd gram(k, k);
-  Eigen::VectorXd rhs(k);
-  gram(0, 0) = double(len);
-  rhs(0) = r.sum();
-  if (n > 0) {
-    const auto f = free_rows.topRows(rows);
-    gram.block(1, 1, n, n) = f.transpose() * f;
-    gram.block(0, 1, 1, n) = f.colwise().sum();
-    gram.block(1, 0, n, 1) = gram.block(0, 1, 1, n).transpose();
-    rhs.segment(1, n) = f.transpose() * r.head(rows);
-  }
-  if (m > 0) {
-    const Eigen::MatrixXd& x = *extra;
-    gram.block(1 + n, 1 + n, m, m) = x.transpose() * x;
-    gram.block(0, 1 + n, 1, m) = x.colwise().sum();
-    gram.block(1 + n, 0, m, 1) = gram.block(0, 1 + n, 1, m).transpose();
-    if (n > 0) {
-      gram.block(1, 1 + n, n, m) = free_rows.topRows(rows).transpose() * x.topRows(rows);
-      gram.block(1 + n, 1, m, n) = gram.block(1, 1 + n, n, m).transpose();
-    }
-    rhs.tail(m) = x.transpose() * r;
-  }
-  return EquilibratedSolve(gram, rhs, rank);
 }
 
 // The sensor's own columns on a segment [start, start + len) of a record: a drift's ramp

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -70,6 +71,12 @@ struct Nuisance {
 StateSpace SampledUndelayed(const TransferFunction& plant, double ts);
 Eigen::MatrixXd FreeResponse(const StateSpace& d, long n);
 std::vector<std::pair<long, long>> Segments(const GapRecord& record, long segment);
+// Least squares of r on [1, F] (F = the free response's first rows, zero below them): [b; x0].
+// With `extra` (the sensor's own columns, as long as r: a drift's ramp, a step's level): on
+// [1, F, extra], [b; x0; c]. Equilibrated normal equations, a minimum-norm solution where the
+// columns are nearly dependent; `rank`: the columns' numerical rank.
+Eigen::VectorXd OffsetAndStateFit(const Eigen::VectorXd& r, const Eigen::MatrixXd& free_rows, long* rank = nullptr,
+                                  const Eigen::MatrixXd* extra = nullptr);
 
 // One candidate: x = [θ (plant log multipliers) | du | φ_1 | φ_2].
 class Candidate {
@@ -408,9 +415,11 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
 // it must beat that pair, with what the diagnosis finds on it or alone.
 enum class HigherOrderMode { kAdopt, kAgainstVerdict, kAgainstPair };
 // The diagnosis again on check.plant; the verdict becomes unmodelled_dynamics with the static
-// effect(s) found there (returns true) when `mode` allows it (above).
+// effect(s) found there (returns true) when `mode` allows it (above). `verdict_follows_input`:
+// the input–residual test on what the verdict so far leaves on validation, where the caller has
+// run it already (else it is run here when needed).
 bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, const CandidateFit& top,
-                      GapReport& report, HigherOrderMode mode);
+                      GapReport& report, HigherOrderMode mode, std::optional<bool> verdict_follows_input = {});
 
 // The verdict takes the candidate's effects, their 1σ, plant, validation NRMSE and nuisance.
 void AdoptCandidate(const CandidateFit& c, GapVerdict& v);

@@ -879,7 +879,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
     // friction case (seed 31, case 47) was taken by the order-4 part's free response.
     std::string note;
     if (ResidualFollowsInput(validation, ctx.y_val - report.validation_prediction, &note))
-      unmodelled = AdoptHigherOrder(ctx, linear, top, report, HigherOrderMode::kAgainstVerdict);
+      unmodelled = AdoptHigherOrder(ctx, linear, top, report, HigherOrderMode::kAgainstVerdict, true);
     else
       report.notes.push_back("linear order check: not against " + v.effect + ": what it leaves on the validation "
                              "records does not follow the input (" + note + ")");

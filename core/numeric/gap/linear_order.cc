@@ -26,7 +26,8 @@ namespace {
 
 // The prediction `y_hat` given also the free response of `plant` on every shooting segment of the
 // validation records: per segment, the residual y − ŷ regressed on [1, F] (F = the plant's free
-// response from the segment's start, columns equilibrated) and the fit added to ŷ. Under multiple
+// response from the segment's start; OffsetAndStateFit, as a candidate's own nuisance) and the
+// fit added to ŷ. Under multiple
 // shooting every segment's state is fitted, on validation records too, so a model with more
 // states follows more of a slow wander within each segment (a load's walk on an integrator)
 // through its free response alone. Two models, each given the other's free response, differ only
@@ -40,15 +41,9 @@ Eigen::VectorXd GivenFreeResponse(const FitContext& ctx, const TransferFunction&
     for (const auto& [start, len] : Segments(r, ctx.nuisance.segment)) {
       const long at = offset + start - r.score_from;
       const Eigen::MatrixXd f = FreeResponse(d, len);
-      Eigen::MatrixXd cols = Eigen::MatrixXd::Zero(len, 1 + f.cols());
-      cols.col(0).setOnes();
-      cols.block(0, 1, f.rows(), f.cols()) = f;
-      for (long j = 0; j < cols.cols(); ++j) {
-        const double norm = cols.col(j).norm();
-        if (norm > 0) cols.col(j) /= norm;
-      }
-      const Eigen::VectorXd residual = ctx.y_val.segment(at, len) - y_hat.segment(at, len);
-      out.segment(at, len) += cols * cols.completeOrthogonalDecomposition().solve(residual);
+      const Eigen::VectorXd coef = OffsetAndStateFit(ctx.y_val.segment(at, len) - y_hat.segment(at, len), f);
+      out.segment(at, len).array() += coef(0);
+      if (f.cols() > 0) out.segment(at, f.rows()) += f * coef.tail(f.cols());
     }
     offset += r.y.size() - r.score_from;
   }
@@ -312,7 +307,7 @@ LinearOrderCheck CheckLinearOrder(const FitContext& ctx, const CandidateFit& top
 }
 
 bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, const CandidateFit& top,
-                      GapReport& report, HigherOrderMode mode) {
+                      GapReport& report, HigherOrderMode mode, std::optional<bool> verdict_follows_input) {
   GapVerdict& v = report.verdict;
   const bool compare = mode != HigherOrderMode::kAdopt;
   const bool against_pair = mode == HigherOrderMode::kAgainstPair;
@@ -391,7 +386,10 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
     double z_free = INFINITY;
     std::string input_note;
     const bool wander = ctx.nuisance.segment > 0 &&
-                        !ResidualFollowsInput(*ctx.validation, ctx.y_val - report.validation_prediction, &input_note);
+                        !(verdict_follows_input ? *verdict_follows_input
+                                                : ResidualFollowsInput(*ctx.validation,
+                                                                       ctx.y_val - report.validation_prediction,
+                                                                       &input_note));
     if (wander)
       z_free = ValidationGainZ(ctx.y_val, GivenFreeResponse(ctx, found ? a.plant : check.plant, report.validation_prediction),
                                GivenFreeResponse(ctx, VerdictLinearPart(v), adopted), 0.0, true);

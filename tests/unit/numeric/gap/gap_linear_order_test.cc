@@ -194,7 +194,7 @@ TEST(GapLinearOrderTest, AFixedFitSchemeIsKeptSoThatTheInnerDiagnosisComparesWit
 // n0 + 2 gained over the verdict on validation (z 3.23 and 3.09 with the automatic lag) and was
 // adopted: unmodelled_dynamics. Its two extra states are fitted on every validation segment and
 // follow the walk within it; given each other's free response on every segment, the two models
-// differ by z 0.43 and −2.68. What the verdict leaves does not follow the input, so that gain is
+// differ by z 0.50 and −3.58. What the verdict leaves does not follow the input, so that gain is
 // required too, and the lag stays.
 class GapWalkOrderTest : public ::testing::TestWithParam<int> {};
 
