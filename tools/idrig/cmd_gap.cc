@@ -51,6 +51,8 @@ void WriteCase(const GapCase& c, const std::string& dir, int index) {
   truth["real"] = ModelToJson(c.real);
   truth["noise_sigma"] = c.noise_sigma;
   truth["excitation"] = c.excitation;
+  truth["visibility"] = nlohmann::json::array();  // GapCase::visibility; +inf (none) as null
+  for (double v : c.visibility) truth["visibility"].push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json());
   std::ofstream(base + "-truth.json") << truth.dump(2) << "\n";
 }
 
@@ -151,17 +153,25 @@ void RunBench(const BenchSettings& b) {
       o.shrink = report.verdict.shrink;
       o.confidence = report.verdict.confidence;
       o.excitation = c.excitation;
+      o.visibility = c.visibility;
       o.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       std::string truth_label, named_label;
       for (EffectKind k : truth) truth_label += (truth_label.empty() ? "" : "+") + std::string(EffectName(k));
       for (const auto& n : o.effects) named_label += (named_label.empty() ? "" : "+") + n;
+      std::string hidden;  // the withheld effects within the noise (GapCase::visibility)
+      for (size_t k = 0; k < truth.size() && k < c.visibility.size(); ++k)
+        if (c.visibility[k] < BenchVisibilityThreshold()) {
+          char v[120];
+          std::snprintf(v, sizeof v, "%s%s %.3g", hidden.empty() ? "" : ", ", EffectName(truth[k]), c.visibility[k]);
+          hidden += v;
+        }
       std::lock_guard<std::mutex> lock(print);
       std::cerr << "case " << i << ": truth " << truth_label << " (" << c.excitation
                 << "), verdict " << o.verdict << " [" << named_label << "], confidence "
                 << std::setprecision(3) << o.confidence << ", shrink " << o.shrink << ", "
                 << o.seconds << " s"
                 << (report.sensor_steps.empty() ? "" : ", " + std::to_string(report.sensor_steps.size()) + " sensor steps marked")
-                << "\n";
+                << (hidden.empty() ? "" : ", within the noise (visibility): " + hidden) << "\n";
     }
   };
   std::vector<std::thread> threads;
@@ -187,6 +197,11 @@ void RunBench(const BenchSettings& b) {
                           {"top1_decidable", s.top1_decidable},
                           {"decidable_combo_cases", s.decidable_combo_cases},
                           {"combo_both_decidable", s.combo_both_decidable},
+                          {"visibility_threshold", BenchVisibilityThreshold()},
+                          {"detectable_single_cases", s.detectable_single_cases},
+                          {"top1_detectable", s.top1_detectable},
+                          {"detectable_combo_cases", s.detectable_combo_cases},
+                          {"combo_both_detectable", s.combo_both_detectable},
                           {"confusion", s.confusion}};
     for (const auto& [kind, counts] : s.by_excitation)
       out["top1_by_excitation"][kind] = double(counts.first) / counts.second;
@@ -213,6 +228,9 @@ void RunBench(const BenchSettings& b) {
                "two-valued input): top-1 "
             << Rate(s.decidable_single_correct, s.decidable_single_cases) << ", both named "
             << Rate(s.decidable_combo_both, s.decidable_combo_cases) << "\n";
+  std::cout << "and without the effects within the noise (visibility under " << BenchVisibilityThreshold()
+            << "): top-1 " << Rate(s.detectable_single_correct, s.detectable_single_cases) << ", both named "
+            << Rate(s.detectable_combo_both, s.detectable_combo_cases) << "\n";
   std::cout << "median validated shrink (right effect) ";
   if (std::isnan(s.median_shrink_correct))
     std::cout << "n/a (no single-effect case named right)";

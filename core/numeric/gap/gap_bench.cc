@@ -7,6 +7,7 @@
 
 #include "core/numeric/model/lti_model.h"
 #include "core/numeric/signal/excitation.h"
+#include "core/numeric/validation.h"
 
 namespace idrig {
 namespace {
@@ -390,6 +391,46 @@ void AddGlitches(Eigen::VectorXd& y, int count, std::mt19937_64& rng) {
   }
 }
 
+namespace {
+
+// GapCase::visibility: the validation record's noise-free output with every withheld effect and
+// without each in turn (the same warm-up and offsets; no noise, drift or load), the difference
+// less its least-squares fit on [1, y without] ([1] for parameter_mismatch), over σ².
+std::vector<double> EffectVisibility(const GapCase& c, long warm, const GapCaseOptions& options) {
+  const Eigen::VectorXd& u = c.validation.u;
+  Eigen::VectorXd padded = Eigen::VectorXd::Zero(warm + u.size());
+  padded.tail(u.size()) = u;
+  auto clean = [&](const TransferFunction& plant, const std::vector<Effect>& effects) {
+    std::mt19937_64 quiet(0);
+    const Eigen::VectorXd y = SimulateRig(plant, effects, padded, options.sample_time, 0.0, quiet, c.input_offset,
+                                          c.output_offset);
+    return Eigen::VectorXd(y.tail(u.size()));
+  };
+  const Eigen::VectorXd all = clean(c.real, c.effects);
+  std::vector<double> out;
+  for (size_t i = 0; i < c.truths.size(); ++i) {
+    const EffectKind k = c.truths[i];
+    if (k == EffectKind::kNone || !(c.noise_sigma > 0)) {
+      out.push_back(std::numeric_limits<double>::infinity());
+      continue;
+    }
+    std::vector<Effect> others;
+    for (size_t j = 0; j < c.effects.size(); ++j)
+      if (j != i) others.push_back(c.effects[j]);
+    const bool mismatch = k == EffectKind::kParameterMismatch;
+    const Eigen::VectorXd without = clean(mismatch ? c.sim : c.real, others);
+    Eigen::MatrixXd basis(u.size(), mismatch ? 1 : 2);
+    basis.col(0).setOnes();
+    if (!mismatch) basis.col(1) = without;
+    const Eigen::VectorXd d = all - without;
+    const Eigen::VectorXd left = d - basis * basis.colPivHouseholderQr().solve(d);
+    out.push_back(left.squaredNorm() / (c.noise_sigma * c.noise_sigma));
+  }
+  return out;
+}
+
+}  // namespace
+
 GapCase MakeGapCase(EffectKind truth, std::mt19937_64& rng, const GapCaseOptions& options) {
   return MakeGapCase(std::vector<EffectKind>{truth}, rng, options);
 }
@@ -520,8 +561,11 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
   c.validation.sample_time = options.sample_time;
   // Sensor or acquisition glitches, drawn last so that the rest of the case does not move.
   for (GapRecord* r : {&c.estimation, &c.validation}) AddGlitches(r->y, options.glitches, rng);
+  c.visibility = EffectVisibility(c, warm, options);
   return c;
 }
+
+double BenchVisibilityThreshold() { return ChiSquareQuantile(1 - 0.01 / (AllEffects().size() - 2), 1); }
 
 const std::vector<std::string>& BenchExcitations() {
   static const std::vector<std::string> kinds = {"levels", "prbs", "rbs", "noise", "steps", "chirp", "multisine"};
@@ -590,6 +634,17 @@ GapBenchScore ScoreGapBench(const std::vector<GapBenchOutcome>& outcomes) {
       ++s.decidable_combo_cases;
       if (has(truth[0]) && has(truth[1])) ++s.decidable_combo_both;
     }
+    const bool detectable = decidable && std::all_of(o.visibility.begin(), o.visibility.end(), [](double v) {
+                              return v >= BenchVisibilityThreshold();
+                            });
+    if (detectable && truth.size() == 1) {
+      ++s.detectable_single_cases;
+      if (o.verdict == truth[0]) ++s.detectable_single_correct;
+    }
+    if (detectable && truth.size() == 2) {
+      ++s.detectable_combo_cases;
+      if (has(truth[0]) && has(truth[1])) ++s.detectable_combo_both;
+    }
     if (truth.size() == 1) {
       ++s.single_cases;
       ++s.by_excitation[o.excitation].second;
@@ -623,6 +678,8 @@ GapBenchScore ScoreGapBench(const std::vector<GapBenchOutcome>& outcomes) {
   s.mean_seconds = s.cases ? seconds / s.cases : 0.0;
   s.top1_decidable = s.decidable_single_cases ? double(s.decidable_single_correct) / s.decidable_single_cases : 0.0;
   s.combo_both_decidable = s.decidable_combo_cases ? double(s.decidable_combo_both) / s.decidable_combo_cases : 0.0;
+  s.top1_detectable = s.detectable_single_cases ? double(s.detectable_single_correct) / s.detectable_single_cases : 0.0;
+  s.combo_both_detectable = s.detectable_combo_cases ? double(s.detectable_combo_both) / s.detectable_combo_cases : 0.0;
   return s;
 }
 

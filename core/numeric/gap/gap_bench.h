@@ -78,7 +78,22 @@ struct GapCase {
   double input_offset = 0;     // actuator offset [units of u]
   double output_offset = 0;    // sensor offset [units of y], added after the ADC
   GapRecord estimation, validation;
+  // How far each withheld effect (in the order of `truths`) shows above the noise on the
+  // validation record: ‖Δy⊥‖²/σ², Δy the noise-free output of the rig with every withheld
+  // effect less that without this one (the other kept; parameter_mismatch: with G0's linear
+  // part instead of the rig's), ⊥ after the least-squares fit of an offset and a gain of the
+  // output without it (what a refitted G0 and the output offset absorb at once; for
+  // parameter_mismatch the offset only). The noncentrality of a test that knew the effect and
+  // everything else: an upper bound on what any diagnosis can see (a refit of the plant's
+  // dynamics or a free state per shooting segment absorbs more). `none`: +inf.
+  std::vector<double> visibility;
 };
+
+// The visibility (GapCase::visibility) under which a withheld effect is within the noise: the
+// 1 % level of χ²(1) Bonferroni-corrected over the 11 effects (none and parameter_mismatch
+// aside), the likelihood-ratio threshold a one-parameter effect must pass in the diagnosis. Below it even a test that knew the effect
+// would miss it about half the time or more.
+double BenchVisibilityThreshold();
 
 // Throws std::invalid_argument naming a damping range that is not 0 < LO <= HI or a noise
 // pole outside [0, 1) (MakeGapCase checks them; a front end may check them up front).
@@ -139,6 +154,7 @@ struct GapBenchOutcome {
   std::string verdict;                  // verdict.effect (may be "ambiguous")
   std::vector<std::string> effects;     // verdict.effects' names (one or two)
   std::string excitation;
+  std::vector<double> visibility;       // GapCase::visibility (empty: not known, counted as visible)
   double shrink = 0, confidence = 0, seconds = 0;
 };
 
@@ -160,6 +176,12 @@ struct GapBenchScore {
   int decidable_single_cases = 0, decidable_single_correct = 0;
   int decidable_combo_cases = 0, decidable_combo_both = 0;
   double top1_decidable = 0, combo_both_decidable = 0;
+  // The decidable cases whose withheld effects each show above the noise (visibility at least
+  // BenchVisibilityThreshold()): an effect below it is missed by any method, a `none` there is
+  // the honest verdict. `none` cases always count.
+  int detectable_single_cases = 0, detectable_single_correct = 0;
+  int detectable_combo_cases = 0, detectable_combo_both = 0;
+  double top1_detectable = 0, combo_both_detectable = 0;
   double mean_seconds = 0;
   // rows: the truth ("a" or "a+b"); columns: the named effects ("x" or "x+y") with counts.
   std::map<std::string, std::map<std::string, int>> confusion;

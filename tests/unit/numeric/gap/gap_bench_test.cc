@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <set>
 #include <string>
 #include <vector>
@@ -272,32 +273,43 @@ TEST(GapBenchTest, ThePlanHasTheRequestedShareOfPairsSpreadEvenly) {
 
 TEST(GapBenchTest, ScoresCountBothNamedOrderFreeAndTopOneAsEitherOfThePair) {
   std::vector<GapBenchOutcome> o(6);
-  o[0] = {{EffectKind::kDeadZone}, "dead_zone", {"dead_zone"}, "levels"};
-  o[1] = {{EffectKind::kNone}, "backlash", {"backlash"}, "prbs"};
-  o[2] = {{EffectKind::kNone}, "none", {}, "prbs"};  // no effects list: verdict.effect alone
+  const double inf = std::numeric_limits<double>::infinity();
+  o[0] = {{EffectKind::kDeadZone}, "dead_zone", {"dead_zone"}, "levels", {}};  // visibility unknown: counted
+  o[1] = {{EffectKind::kNone}, "backlash", {"backlash"}, "prbs", {inf}};
+  o[2] = {{EffectKind::kNone}, "none", {}, "prbs", {inf}};  // no effects list: verdict.effect alone
   o[3] = {{EffectKind::kBacklash, EffectKind::kOutputQuantization}, "output_quantization",
-          {"output_quantization", "backlash"}, "levels"};
-  o[4] = {{EffectKind::kBacklash, EffectKind::kOutputQuantization}, "backlash", {"backlash"}, "rbs"};
+          {"output_quantization", "backlash"}, "levels", {50.0, 400.0}};
+  o[4] = {{EffectKind::kBacklash, EffectKind::kOutputQuantization}, "backlash", {"backlash"}, "rbs", {50.0, 400.0}};
   o[5] = {{EffectKind::kDeadZone, EffectKind::kCubicStiffness}, "time_delay",
-          {"time_delay", "dead_zone"}, "rbs"};
+          {"time_delay", "dead_zone"}, "rbs", {50.0, 400.0}};
+  o.push_back({{EffectKind::kCoulombFriction, EffectKind::kOutputSaturation}, "coulomb_friction",
+               {"coulomb_friction"}, "levels", {300.0, 2.0}});  // the clip within the noise
   const GapBenchScore s = ScoreGapBench(o);
   EXPECT_EQ(s.single_cases, 3);
   EXPECT_EQ(s.single_correct, 2);
   EXPECT_EQ(s.none_cases, 2);
   EXPECT_EQ(s.false_alarms, 1);
-  EXPECT_EQ(s.combo_cases, 3);
+  EXPECT_EQ(s.combo_cases, 4);
   EXPECT_EQ(s.combo_both, 1);
-  EXPECT_EQ(s.combo_either, 2);
-  EXPECT_DOUBLE_EQ(s.combo_both_rate, 1.0 / 3);
+  EXPECT_EQ(s.combo_either, 3);
+  EXPECT_DOUBLE_EQ(s.combo_both_rate, 1.0 / 4);
   EXPECT_EQ(s.confusion.at("backlash+output_quantization").at("output_quantization+backlash"), 1);
   EXPECT_EQ(s.by_pair.at("backlash+output_quantization").first, 1);
   // Undecidable: backlash or a dead zone under a two-valued input (o[4], o[5]); o[1], o[2]
   // (none under prbs) stay decidable.
   EXPECT_EQ(s.decidable_single_cases, 3);
   EXPECT_EQ(s.decidable_single_correct, 2);
-  EXPECT_EQ(s.decidable_combo_cases, 1);
+  EXPECT_EQ(s.decidable_combo_cases, 2);
   EXPECT_EQ(s.decidable_combo_both, 1);
-  EXPECT_DOUBLE_EQ(s.combo_both_decidable, 1.0);
+  EXPECT_DOUBLE_EQ(s.combo_both_decidable, 0.5);
+  // Detectable: decidable, and each withheld effect above BenchVisibilityThreshold() (about 11.4):
+  // the last pair's clip (2.0) is not.
+  EXPECT_NEAR(BenchVisibilityThreshold(), 11.4, 0.1);
+  EXPECT_EQ(s.detectable_single_cases, 3);
+  EXPECT_EQ(s.detectable_single_correct, 2);
+  EXPECT_EQ(s.detectable_combo_cases, 1);
+  EXPECT_EQ(s.detectable_combo_both, 1);
+  EXPECT_DOUBLE_EQ(s.combo_both_detectable, 1.0);
 }
 
 TEST(GapBenchTest, BadPairsAndSharesAreNamed) {
@@ -376,6 +388,49 @@ TEST(GapBenchTest, PlantFamiliesHaveTheirZerosAndModes) {
   GapCaseOptions bad;
   bad.plants = "three-mass";
   EXPECT_THROW(MakeGapCase(EffectKind::kNone, rng, bad), std::invalid_argument);
+}
+
+
+// GapCase::visibility against closed forms. An |y| sensor on an output that never changes sign
+// is y itself (or −y, a gain): nothing is left once an offset and a gain are fitted, whatever
+// a diagnosis does (`gap bench --offsets --integrating --combos 1 --pairs any --excitation
+// levels --seed 980`, case 49: a cubic spring and an |y| sensor on a rig that walks away from
+// zero and stays on one side). A quantiser's rounding error on an output spanning many steps is
+// uniform on [−q/2, q/2]: N·q²/12 over σ². And none is +inf.
+TEST(GapBenchTest, VisibilityIsWhatNoGainAndOffsetAbsorbAgainstTheNoise) {
+  GapCaseOptions options;
+  options.offsets = true;
+  options.integrating = true;
+  options.excitation = "levels";
+  {
+    const std::vector<EffectKind> truth = BenchCaseTruth(49, 1.0, true);
+    ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kCubicStiffness, EffectKind::kSensorNonlinearity}));
+    std::mt19937_64 rng(BenchCaseSeed(980, 49));
+    const GapCase c = MakeGapCase(truth, rng, options);
+    ASSERT_EQ(c.visibility.size(), 2u);
+    ASSERT_EQ(c.effects[1].params.back(), 1.0) << "the sensor is |y|";
+    EXPECT_GT(c.visibility[0], BenchVisibilityThreshold()) << "the cubic spring shows";
+    EXPECT_LT(c.visibility[1], 1e-6) << "the |y| sensor on a one-signed output";
+  }
+  int quantisers = 0;
+  for (int i = 0; i < 40 && quantisers < 3; ++i) {
+    const std::vector<EffectKind> truth = BenchCaseTruth(i, 0.0);
+    if (truth[0] != EffectKind::kOutputQuantization && truth[0] != EffectKind::kNone) continue;
+    std::mt19937_64 rng(BenchCaseSeed(7, i));
+    GapCaseOptions plain;
+    plain.excitation = "levels";
+    const GapCase c = MakeGapCase(truth, rng, plain);
+    ASSERT_EQ(c.visibility.size(), 1u);
+    if (truth[0] == EffectKind::kNone) {
+      EXPECT_TRUE(std::isinf(c.visibility[0]));
+      continue;
+    }
+    ++quantisers;
+    const double q = c.effects[0].params[0];
+    const double expected = c.validation.y.size() * q * q / 12 / (c.noise_sigma * c.noise_sigma);
+    EXPECT_NEAR(c.visibility[0] / expected, 1.0, 0.15) << "case " << i << ", q " << q;
+  }
+  EXPECT_EQ(quantisers, 3);
 }
 
 }  // namespace
