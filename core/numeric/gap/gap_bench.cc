@@ -391,46 +391,6 @@ void AddGlitches(Eigen::VectorXd& y, int count, std::mt19937_64& rng) {
   }
 }
 
-namespace {
-
-// GapCase::visibility: the validation record's noise-free output with every withheld effect and
-// without each in turn (the same warm-up and offsets; no noise, drift or load), the difference
-// less its least-squares fit on [1, y without] ([1] for parameter_mismatch), over σ².
-std::vector<double> EffectVisibility(const GapCase& c, long warm, const GapCaseOptions& options) {
-  const Eigen::VectorXd& u = c.validation.u;
-  Eigen::VectorXd padded = Eigen::VectorXd::Zero(warm + u.size());
-  padded.tail(u.size()) = u;
-  auto clean = [&](const TransferFunction& plant, const std::vector<Effect>& effects) {
-    std::mt19937_64 quiet(0);
-    const Eigen::VectorXd y = SimulateRig(plant, effects, padded, options.sample_time, 0.0, quiet, c.input_offset,
-                                          c.output_offset);
-    return Eigen::VectorXd(y.tail(u.size()));
-  };
-  const Eigen::VectorXd all = clean(c.real, c.effects);
-  std::vector<double> out;
-  for (size_t i = 0; i < c.truths.size(); ++i) {
-    const EffectKind k = c.truths[i];
-    if (k == EffectKind::kNone || !(c.noise_sigma > 0)) {
-      out.push_back(std::numeric_limits<double>::infinity());
-      continue;
-    }
-    std::vector<Effect> others;
-    for (size_t j = 0; j < c.effects.size(); ++j)
-      if (j != i) others.push_back(c.effects[j]);
-    const bool mismatch = k == EffectKind::kParameterMismatch;
-    const Eigen::VectorXd without = clean(mismatch ? c.sim : c.real, others);
-    Eigen::MatrixXd basis(u.size(), mismatch ? 1 : 2);
-    basis.col(0).setOnes();
-    if (!mismatch) basis.col(1) = without;
-    const Eigen::VectorXd d = all - without;
-    const Eigen::VectorXd left = d - basis * basis.colPivHouseholderQr().solve(d);
-    out.push_back(left.squaredNorm() / (c.noise_sigma * c.noise_sigma));
-  }
-  return out;
-}
-
-}  // namespace
-
 GapCase MakeGapCase(EffectKind truth, std::mt19937_64& rng, const GapCaseOptions& options) {
   return MakeGapCase(std::vector<EffectKind>{truth}, rng, options);
 }
@@ -530,7 +490,9 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
     if (rms > 0) load_gain = std::sqrt(share) / rms;
   }
   // drift: the sensor's rise over the record, in noise sigmas (GapCaseOptions::drift).
-  auto record = [&](const Eigen::VectorXd& u, double sigma, std::mt19937_64& g, double drift = 0) {
+  // The rig with `effects` on `plant` (the case's own unless told otherwise: GapCase::visibility).
+  auto record_of = [&](const TransferFunction& plant, const std::vector<Effect>& effects, const Eigen::VectorXd& u,
+                       double sigma, std::mt19937_64& g, double drift) {
     Eigen::VectorXd padded = Eigen::VectorXd::Zero(warm + u.size());
     padded.tail(u.size()) = u;
     Eigen::VectorXd ramp;
@@ -544,9 +506,12 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
       for (long k = 0; k < load.size(); ++k) load(k) = load_gain * sigma * Gaussian(g);
     }
     const double output_sigma = sigma * std::sqrt(1 - share);
-    const Eigen::VectorXd y = SimulateRig(c.real, c.effects, padded, options.sample_time, output_sigma, g,
+    const Eigen::VectorXd y = SimulateRig(plant, effects, padded, options.sample_time, output_sigma, g,
                                           c.input_offset, c.output_offset, options.noise_pole, ramp, load);
     return Eigen::VectorXd(y.tail(u.size()));
+  };
+  auto record = [&](const Eigen::VectorXd& u, double sigma, std::mt19937_64& g, double drift = 0) {
+    return record_of(c.real, c.effects, u, sigma, g, drift);
   };
   // Noise from the SNR of the rig's own output on the estimation input.
   std::mt19937_64 quiet(0);
@@ -554,14 +519,43 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
   const double rms = std::sqrt((y_clean.array() - y_clean.mean()).square().mean());
   c.noise_sigma = rms * std::pow(10.0, -options.snr_db / 20);
   c.estimation.u = u_est;
+  const std::mt19937_64 estimation_draws = rng;  // to replay the same load and noise without an effect
   c.estimation.y = record(u_est, c.noise_sigma, rng, options.drift);
   c.estimation.sample_time = options.sample_time;
   c.validation.u = u_val;
+  const std::mt19937_64 validation_draws = rng;  // to replay the same load and noise without an effect
   c.validation.y = record(u_val, c.noise_sigma, rng, -options.drift);
   c.validation.sample_time = options.sample_time;
+  const std::vector<Eigen::VectorXd> unglitched = {c.estimation.y, c.validation.y};
   // Sensor or acquisition glitches, drawn last so that the rest of the case does not move.
   for (GapRecord* r : {&c.estimation, &c.validation}) AddGlitches(r->y, options.glitches, rng);
-  c.visibility = EffectVisibility(c, warm, options);
+  // GapCase::visibility: each record drawn again with the same load, noise and drift but
+  // without each withheld effect in turn; the difference, less its least-squares fit on
+  // [1, y without] ([1] for parameter_mismatch), over σ²; the larger of the two records.
+  for (size_t i = 0; i < c.truths.size(); ++i) {
+    const EffectKind k = c.truths[i];
+    if (k == EffectKind::kNone || !(c.noise_sigma > 0)) {
+      c.visibility.push_back(std::numeric_limits<double>::infinity());
+      continue;
+    }
+    std::vector<Effect> others;
+    for (size_t j = 0; j < c.effects.size(); ++j)
+      if (j != i) others.push_back(c.effects[j]);
+    const bool mismatch = k == EffectKind::kParameterMismatch;
+    double most = 0;
+    for (int r = 0; r < 2; ++r) {
+      std::mt19937_64 replay = r == 0 ? estimation_draws : validation_draws;
+      const Eigen::VectorXd without = record_of(mismatch ? c.sim : c.real, others, r == 0 ? u_est : u_val,
+                                                c.noise_sigma, replay, r == 0 ? options.drift : -options.drift);
+      Eigen::MatrixXd basis(without.size(), mismatch ? 1 : 2);
+      basis.col(0).setOnes();
+      if (!mismatch) basis.col(1) = without;
+      const Eigen::VectorXd d = unglitched[r] - without;
+      const Eigen::VectorXd left = d - basis * basis.colPivHouseholderQr().solve(d);
+      most = std::max(most, left.squaredNorm() / (c.noise_sigma * c.noise_sigma));
+    }
+    c.visibility.push_back(most);
+  }
   return c;
 }
 

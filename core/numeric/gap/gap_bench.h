@@ -79,13 +79,14 @@ struct GapCase {
   double output_offset = 0;    // sensor offset [units of y], added after the ADC
   GapRecord estimation, validation;
   // How far each withheld effect (in the order of `truths`) shows above the noise on the
-  // validation record: ‖Δy⊥‖²/σ², Δy the noise-free output of the rig with every withheld
-  // effect less that without this one (the other kept; parameter_mismatch: with G0's linear
-  // part instead of the rig's), ⊥ after the least-squares fit of an offset and a gain of the
-  // output without it (what a refitted G0 and the output offset absorb at once; for
-  // parameter_mismatch the offset only). The noncentrality of a test that knew the effect and
-  // everything else: an upper bound on what any diagnosis can see (a refit of the plant's
-  // dynamics or a free state per shooting segment absorbs more). `none`: +inf.
+  // record that shows it more: ‖Δy⊥‖²/σ², Δy the record's output less the same record drawn again
+  // without this effect (the other kept; parameter_mismatch: with G0's linear part instead of
+  // the rig's) with the same load, noise and drift (so Δy is noise-free but for a quantiser's
+  // rounding, and an effect acts on the walk a load drives), ⊥ after the least-squares fit of
+  // an offset and a gain of the output without it (what a refitted G0 and the output offset
+  // absorb at once; for parameter_mismatch the offset only). The noncentrality of a test that
+  // knew the effect and everything else: an upper bound on what any diagnosis can see (a refit
+  // of the plant's dynamics or a free state per shooting segment absorbs more). `none`: +inf.
   std::vector<double> visibility;
 };
 
