@@ -116,6 +116,7 @@ nlohmann::json GapReportToJson(const GapReport& report) {
       {"noise_nrmse", v.noise_nrmse},
       {"remaining_gap_to_noise", v.remaining_gap_to_noise},
       {"below_noise_floor", v.below_noise_floor},
+      {"estimation_only", v.estimation_only},
       {"effect_fitted", EffectName(v.params.kind)},
       {"params", Params(v.params)},
       {"params_std", Params(Effect{v.params.kind, v.param_std})},
@@ -242,6 +243,7 @@ std::string GapReportText(const nlohmann::json& report) {
   if (report.at("where").contains("noise_floor"))
     s << " (" << report["where"]["noise_floor"].value("method", "") << ")";
   if (v.value("below_noise_floor", false)) s << ", below the floor";
+  if (v.value("estimation_only", false)) s << ", on the estimation records only (not confirmed on validation)";
   s << "\n";
   for (const auto& [name, value] : v.at("params").items()) {
     s << "  " << name << " = " << value;

@@ -175,6 +175,9 @@ struct GapVerdict {
   double noise_nrmse = 0;        // the independent noise floor as an NRMSE (where.noise_floor)
   double remaining_gap_to_noise = 0;  // nrmse_after − noise_nrmse: what is left beyond the noise
   bool below_noise_floor = false;     // nrmse_after < noise_nrmse (shrink may then exceed 1)
+  // The effect explains a gap that only the estimation records show; G0 fits the validation
+  // records within the noise, so they do not confirm it (a note gives the figures).
+  bool estimation_only = false;
   Effect params;
   std::vector<double> param_std;
   TransferFunction plant;        // the adjusted linear part

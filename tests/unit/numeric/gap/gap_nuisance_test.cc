@@ -593,6 +593,33 @@ TEST(GapColouredNoiseTest, ALagFittedToNothingIsNotNamed) {
   }
 }
 
+TEST(GapOffsetTest, AClipThatOnlyTheEstimationRecordReachesIsNamedAsNotConfirmed) {
+  // `idrig gap bench --cases 130 --seed 4020 --snr 20 --offsets`, case 62: an output clip whose
+  // lower limit the estimation record's trough reaches (G0 leaves it at about 3.3 times the noise
+  // variance) and the validation record's does not (G0 within the noise there). The verdict had
+  // been `none`, "G0 fits within the noise". The clip is named, as found on the estimation
+  // records only, with the limits where the bench put them (in the measured coordinates: the
+  // rig's limits plus its sensor offset).
+  std::mt19937_64 rng(BenchCaseSeed(4020, 62));
+  GapCaseOptions options;
+  options.offsets = true;
+  options.snr_db = 20;
+  const GapCase c = MakeGapCase(BenchCaseTruth(62, 0), rng, options);
+  ASSERT_EQ(c.truth, EffectKind::kOutputSaturation);
+  const GapReport report = DiagnoseOnOneThread(c);
+  std::printf("clip on the estimation record only: verdict %s, estimation_only %d, g0_gap %s\n",
+              report.verdict.effect.c_str(), int(report.verdict.estimation_only), report.verdict.g0_gap.c_str());
+  EXPECT_EQ(report.verdict.g0_gap, "within_noise");
+  EXPECT_EQ(report.verdict.effect, "output_saturation");
+  EXPECT_TRUE(report.verdict.estimation_only);
+  EXPECT_EQ(report.verdict.shrink, 0.0);  // no gap on the validation records to close
+  EXPECT_NE(LastNoteWith(report, "found on the estimation records only"), "");
+  ASSERT_EQ(report.verdict.params.params.size(), 2u);
+  const double lo = c.effects[0].params[0] + c.output_offset, hi = c.effects[0].params[1] + c.output_offset;
+  const double span = hi - lo;
+  EXPECT_NEAR(report.verdict.params.params[0], lo, 0.02 * span);  // the limit the estimation record reaches
+}
+
 TEST(GapProcessNoiseTest, AGainErrorThatMatchesTheGapIsNotCheckedOnShorterSegments) {
   // `idrig gap bench --cases 26 --seed 83 --offsets --integrating --noise-pole 0.7`, case 14: a
   // parameter mismatch on an integrating rig under a PRBS, coloured output noise. Its gap (ramps
