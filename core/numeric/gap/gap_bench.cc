@@ -620,25 +620,19 @@ GapBenchScore ScoreGapBench(const std::vector<GapBenchOutcome>& outcomes) {
     bool decidable = true;
     for (EffectKind k : o.truth)
       if (two_valued && IsInputMap(k)) decidable = false;
-    if (decidable && truth.size() == 1) {
-      ++s.decidable_single_cases;
-      if (o.verdict == truth[0]) ++s.decidable_single_correct;
-    }
-    if (decidable && truth.size() == 2) {
-      ++s.decidable_combo_cases;
-      if (has(truth[0]) && has(truth[1])) ++s.decidable_combo_both;
-    }
+    // A subset's counts: single cases and right top-1, pair cases and both named.
+    auto count = [&](bool in, int& singles, int& right, int& pairs, int& both) {
+      if (!in) return;
+      if (truth.size() == 1) ++singles, right += o.verdict == truth[0];
+      else ++pairs, both += has(truth[0]) && has(truth[1]);
+    };
+    count(decidable, s.decidable_single_cases, s.decidable_single_correct, s.decidable_combo_cases,
+          s.decidable_combo_both);
     const bool detectable = decidable && std::all_of(o.visibility.begin(), o.visibility.end(), [](double v) {
                               return v >= BenchVisibilityThreshold();
                             });
-    if (detectable && truth.size() == 1) {
-      ++s.detectable_single_cases;
-      if (o.verdict == truth[0]) ++s.detectable_single_correct;
-    }
-    if (detectable && truth.size() == 2) {
-      ++s.detectable_combo_cases;
-      if (has(truth[0]) && has(truth[1])) ++s.detectable_combo_both;
-    }
+    count(detectable, s.detectable_single_cases, s.detectable_single_correct, s.detectable_combo_cases,
+          s.detectable_combo_both);
     if (truth.size() == 1) {
       ++s.single_cases;
       ++s.by_excitation[o.excitation].second;
