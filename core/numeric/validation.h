@@ -4,6 +4,7 @@
 //  - residual whiteness (autocorrelation with a confidence band and a portmanteau test);
 //  - input–residual cross-correlation (same band; independence of past inputs).
 #include <Eigen/Dense>
+#include <cmath>
 #include <string>
 #include <utility>
 #include <vector>
@@ -69,5 +70,9 @@ InputCorrelationTest TestInputCorrelationPrewhitened(
 double NormalQuantile(double p);
 // χ² quantile with `dof` degrees of freedom, Wilson–Hilferty approximation.
 double ChiSquareQuantile(double p, int dof);
+// Whether a mean square `ratio` (mean of e², over the noise variance σ²) of `n` samples is more
+// than noise: N·ratio above N + 3√(2N), the χ²_N sample variance three of its standard deviations
+// up (one-sided, ≈ 99.9 %).
+inline bool AboveNoiseVariance(double ratio, double n) { return n * ratio > n + 3 * std::sqrt(2.0 * n); }
 
 }  // namespace idrig

@@ -905,7 +905,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
     for (const CandidateWork& w : work)
       if (w.fit.effect.kind == EffectKind::kNone && w.fit.effects.size() <= 1) as_given = &w;
     const double n = static_cast<double>(n_est);
-    if (as_given && as_given->fit.estimation_mse * n > s2 * (n + 3 * std::sqrt(2 * n))) {
+    if (as_given && AboveNoiseVariance(as_given->fit.estimation_mse / s2, n)) {
       const CandidateWork* best = nullptr;
       auto estimation_bic = [&](const CandidateFit& c) { return n * std::log(c.estimation_mse) + c.parameters * std::log(n); };
       for (const CandidateWork& w : work) {
@@ -918,16 +918,19 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
         if (!best || estimation_bic(c) < estimation_bic(best->fit)) best = &w;
       }
       std::string input_note;
-      const Eigen::VectorXd y_est = Stack(estimation, [](const GapRecord& r) { return r.y; });
-      const Eigen::VectorXd y0_est = Stack(estimation, [&](const GapRecord& r) { return as_is.Predict(as_is_fit.x, r); });
-      if (best && ResidualFollowsInput(estimation, y_est - y0_est, &input_note)) {
+      auto gap_follows_input = [&] {  // G0 simulated on the estimation records only when it is needed
+        const Eigen::VectorXd y_est = Stack(estimation, [](const GapRecord& r) { return r.y; });
+        const Eigen::VectorXd y0_est =
+            Stack(estimation, [&](const GapRecord& r) { return as_is.Predict(as_is_fit.x, r); });
+        return ResidualFollowsInput(estimation, y_est - y0_est, &input_note);
+      };
+      if (best && gap_follows_input()) {
         const CandidateFit& c = best->fit;
         v.effect = EffectName(c.effect.kind);
         v.confidence = 1.0;
         AdoptCandidate(c, v);
         v.estimation_only = true;
-        for (const CandidateWork& w : work)
-          if (&w == best) report.validation_prediction = w.y_val;
+        report.validation_prediction = best->y_val;
         char line[600];
         std::snprintf(line, sizeof line,
                       "%s found on the estimation records only: G0 leaves them at %.3g times the noise variance "

@@ -179,8 +179,7 @@ GapWhere LocateGap(const TransferFunction& sim_model, const std::vector<GapRecor
     noise_sigma = rms_e;
   }
   where.gap_to_noise = rms_e / noise_sigma;
-  // χ²_N: N·rms²/σ² exceeds N + 3√(2N) (one-sided ≈ 99.9 %).
-  where.gap_significant = n * std::pow(where.gap_to_noise, 2) > n + 3 * std::sqrt(2.0 * n);
+  where.gap_significant = AboveNoiseVariance(std::pow(where.gap_to_noise, 2), n);
   if (n > 60) {
     const ResidualTest test = TestResiduals(e_all, u_all);
     where.residual_white = test.white;
