@@ -128,6 +128,12 @@ nlohmann::json GapReportToJson(const GapReport& report) {
   for (size_t i = 0; i < v.effects.size(); ++i)
     effects.push_back({{"effect", EffectName(v.effects[i].kind)},
                        {"params", Params(v.effects[i], i < v.effects_std.size() ? &v.effects_std[i] : nullptr)}});
+  // A verdict that names an effect of the library lists it under `effects` too when its
+  // candidate carries no effect of its own: a parameter mismatch is the refitted plant
+  // (`verdict.plant`), with no parameters here. Scripts that read `effects` then see what
+  // `effect` says.
+  if (effects.empty() && v.params.kind != EffectKind::kNone && v.effect == EffectName(v.params.kind))
+    effects.push_back({{"effect", v.effect}, {"params", Params(v.params, &v.param_std)}});
   verdict["effects"] = effects;
   nlohmann::json output_offset = nlohmann::json::array();
   for (double b : v.nuisance.output_offset) output_offset.push_back(Number(b));

@@ -41,6 +41,15 @@ grep -q "first half" <<<"$text" || fail "no note about the split: $text"
 grep -q "^verdict:" <<<"$text" || fail "no verdict line: $text"
 echo "ok: one record split"
 
+# A parameter mismatch is listed under verdict.effects too (its parameters are the refitted
+# plant, verdict.plant): scripts that read `effects` see what `effect` says.
+out=$("$idrig" gap diagnose --sim "$dir/case1-sim.json" --data "$dir/case1-est.csv" \
+      --validate "$dir/case1-val.csv" --json) || fail "gap diagnose (case 1) exited with $?"
+jq -e '.verdict.effect == "parameter_mismatch" and (.verdict.effects | length) == 1
+       and .verdict.effects[0].effect == "parameter_mismatch" and (.verdict.plant.num | length) > 0' \
+  <<<"$out" > /dev/null || fail "parameter mismatch not listed in verdict.effects: $(jq -c '.verdict | {effect, effects}' <<<"$out")"
+echo "ok: parameter_mismatch in verdict.effects"
+
 # A sensor glitch (one reading 50 output ranges off) is bridged and reported, not diagnosed; a
 # record with a stretch cut out is refused at the jump.
 awk -F, 'NR == 1 { print; next } NR == 901 { print $1 "," $2 "," ($3 + 50); next } { print }' \
