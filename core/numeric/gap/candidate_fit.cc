@@ -23,21 +23,23 @@ StateSpace SampledUndelayed(const TransferFunction& plant, double ts) {
 }
 
 Eigen::MatrixXd FreeResponse(const StateSpace& d, long n) {
-  if (d.A.rows() == 0) return Eigen::MatrixXd(n, 0);
-  Eigen::MatrixXd f(n, d.A.rows());
-  Eigen::RowVectorXd c = d.C.row(0);
+  const long order = d.A.rows();
+  if (order == 0 || n <= 0) return Eigen::MatrixXd(std::max<long>(n, 0), order);
+  // Row k is C A^k, built as the columns of its transpose (A^T)^k C^T: one contiguous
+  // matrix-vector product per row, without a temporary per row.
+  Eigen::MatrixXd ft(order, n);
+  ft.col(0) = d.C.row(0).transpose();
   double largest = 0;
   for (long k = 0; k < n; ++k) {
-    f.row(k) = c;
-    const double norm = c.norm();
+    const double norm = ft.col(k).norm();
     largest = std::max(largest, norm);
     // A stable plant's free response decays: below 1e-15 of its largest row it is zero for the
     // projection, so the rows end here (the caller treats the missing rows as zeros).
-    if (!(norm > 1e-15 * largest)) return f.topRows(k + 1);
-    c = c * d.A;
-    if (!c.allFinite()) return f.topRows(k + 1);
+    if (!(norm > 1e-15 * largest) || k + 1 == n) return ft.leftCols(k + 1).transpose();
+    ft.col(k + 1).noalias() = d.A.transpose() * ft.col(k);
+    if (!ft.col(k + 1).allFinite()) return ft.leftCols(k + 1).transpose();
   }
-  return f;
+  return ft.transpose();
 }
 
 std::vector<std::pair<long, long>> Segments(const GapRecord& record, long segment) {
