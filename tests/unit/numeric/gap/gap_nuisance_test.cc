@@ -649,7 +649,11 @@ TEST(GapProcessNoiseTest, AGainErrorThatMatchesTheGapIsNotCheckedOnShorterSegmen
 // the noise floor. G0's gap there does not follow the input or is within the floor, and the sensor
 // map matches little of it (signature 0.17, 0.16): the records are diagnosed again with segments of
 // 250 samples, where the walk within a segment is smaller, and nothing is named there, so that
-// diagnosis stands.
+// diagnosis stands. Cases 117 (levels) and 234 (PRBS) were named sensor_nonlinearity even so
+// (LR 244 and 176): with its offset free per segment, a y², y³ map let each segment sit on its own
+// stretch of the map, a gain per segment that took up the walk. Since stop 41 the segments of a
+// record share the sensor's offset behind such a map: 117 and 195 are `none` at 500 samples, 78 and
+// 234 after the diagnosis with 250 (at 500, 78 names a gain, 234 still the sensor map).
 class GapIntegratingProcessNoiseTest : public ::testing::TestWithParam<int> {};
 
 TEST_P(GapIntegratingProcessNoiseTest, AWalkWithinTheShootingSegmentsIsNotAnEffect) {
@@ -666,13 +670,40 @@ TEST_P(GapIntegratingProcessNoiseTest, AWalkWithinTheShootingSegmentsIsNotAnEffe
               c.excitation.c_str(), v.effect.c_str(), v.shooting_segment, v.g0_gap.c_str(), again.c_str());
   EXPECT_EQ(v.effect, "none");
   EXPECT_EQ(v.fit_scheme, "multiple_shooting");
-  EXPECT_EQ(v.shooting_segment, 250);
-  EXPECT_NE(again.find("the diagnosis named sensor_nonlinearity"), std::string::npos) << again;
-  EXPECT_NE(again.find("it names nothing, and that stands"), std::string::npos) << again;
+  if (v.shooting_segment != 500) {  // diagnosed again with shorter segments: what it said stands
+    EXPECT_EQ(v.shooting_segment, 250);
+    EXPECT_NE(again.find("it names nothing, and that stands"), std::string::npos) << again;
+  }
 }
 
-INSTANTIATE_TEST_SUITE_P(Seed2002, GapIntegratingProcessNoiseTest, ::testing::Values(78, 195),
+INSTANTIATE_TEST_SUITE_P(Seed2002, GapIntegratingProcessNoiseTest, ::testing::Values(78, 117, 195, 234),
                          [](const auto& info) { return "case" + std::to_string(info.param); });
+
+// A speed sensor that cannot see the sign (y = |x| + b) on an integrating rig under process noise
+// (`idrig gap bench --cases 26 --seed 2005 --integrating --process-noise 0.5 --offsets`, case 24,
+// PRBS). Behind |y| the shooting segments share the sensor's offset b (PredictFrom), and a
+// segment's own b is fixed only where the plant passes the fold. With b the median of those
+// segments' own, or the b of the segment that fits best, the |y| fit was worse than the truth's
+// and an output clip was named (estimation MSE 0.00847 against 0.00822 with b free per segment);
+// each folding segment's b is therefore scored on the whole record first. The verdict must be
+// the |y| sensor.
+TEST(GapAbsoluteSensorTest, AnIntegratingRigKeepsOneSensorOffsetForTheRecord) {
+  std::mt19937_64 rng(BenchCaseSeed(2005, 24));
+  GapCaseOptions options;
+  options.offsets = true;
+  options.integrating = true;
+  options.process_noise = 0.5;
+  const GapCase c = MakeGapCase(EffectKind::kSensorNonlinearity, rng, options);
+  ASSERT_EQ(c.effects.size(), 1u);
+  ASSERT_TRUE(IsAbsoluteSensor(c.effects.front()));
+  const GapReport report = DiagnoseOnOneThread(c);
+  const GapVerdict& v = report.verdict;
+  std::printf("|y| sensor on an integrating rig under process noise (%s): verdict %s (%zu effects)\n",
+              c.excitation.c_str(), v.effect.c_str(), v.effects.size());
+  EXPECT_EQ(v.fit_scheme, "multiple_shooting");
+  ASSERT_EQ(v.effect, "sensor_nonlinearity");
+  EXPECT_TRUE(IsAbsoluteSensor(v.params));
+}
 
 TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsNotReported) {
   // `idrig gap bench --cases 26 --seed 51 --offsets --ts 0.002 --samples 6000`, case 23: an
