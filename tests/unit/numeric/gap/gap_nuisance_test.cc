@@ -651,7 +651,7 @@ TEST(GapProcessNoiseTest, AGainErrorThatMatchesTheGapIsNotCheckedOnShorterSegmen
 // 250 samples, where the walk within a segment is smaller, and nothing is named there, so that
 // diagnosis stands. Cases 117 (levels) and 234 (PRBS) were named sensor_nonlinearity even so
 // (LR 244 and 176): with its offset free per segment, a y², y³ map let each segment sit on its own
-// stretch of the map, a gain per segment that took up the walk. Since stop 41 the segments of a
+// stretch of the map, a gain per segment that took up the walk. Since stop 42 the segments of a
 // record share the sensor's offset behind such a map: 117 and 195 are `none` at 500 samples, 78 and
 // 234 after the diagnosis with 250 (at 500, 78 names a gain, 234 still the sensor map).
 class GapIntegratingProcessNoiseTest : public ::testing::TestWithParam<int> {};
