@@ -429,6 +429,23 @@ Eigen::VectorXd Candidate::Simulate(const Eigen::VectorXd& x, const GapRecord& r
 
 namespace {
 
+// One segment's prediction through the output maps from its coefficients coef = [b, x0, c]:
+// map(z + F·x0) + b + E·c, or with `offset_inside` map(z + F·x0 + b) + E·c (F = `free`, whose
+// missing rows are zeros; E = `extra`, the sensor's columns, used where it has the segment's
+// rows). The maps' slope into `slope` when given.
+void ThroughMaps(const Eigen::VectorXd& z, const Eigen::MatrixXd& free, const std::vector<Effect>& maps,
+                 const Eigen::VectorXd& coef, const Eigen::MatrixXd& extra, bool offset_inside, Eigen::VectorXd& m,
+                 Eigen::VectorXd* slope) {
+  const long len = z.size(), rows = std::min<long>(len, free.rows()), n = free.cols();
+  const long m_extra = extra.rows() == len ? extra.cols() : 0;
+  m = z;
+  if (n > 0) m.head(rows) += free.topRows(rows) * coef.segment(1, n);
+  if (offset_inside) m.array() += coef(0);
+  ApplyOutputMaps(maps, m, slope);
+  if (!offset_inside) m.array() += coef(0);
+  if (m_extra > 0) m += extra * coef.tail(m_extra);
+}
+
 // The nuisance of one segment through the output maps, ŷ = map(z + F·x0) + b (a sensor offset
 // after the map; the segment's state before it, where the plant's state is): Gauss–Newton on
 // (b, x0) with the map linearised, J = [1, diag(map'(z + F·x0))·F], each step the same
@@ -463,12 +480,7 @@ Eigen::VectorXd OffsetAndStateThroughMaps(const Eigen::VectorXd& y, const Eigen:
   const long m_extra = extra.rows() == len ? extra.cols() : 0;  // the sensor's columns after the maps
   const Eigen::MatrixXd* sensor = m_extra > 0 ? &extra : nullptr;
   auto evaluate = [&](const Eigen::VectorXd& coef, Eigen::VectorXd& m, Eigen::VectorXd* slope) {
-    m = z;
-    if (n > 0) m.head(rows) += free.topRows(rows) * coef.segment(1, n);
-    if (offset_inside) m.array() += coef(0);
-    ApplyOutputMaps(maps, m, slope);
-    if (!offset_inside) m.array() += coef(0);
-    if (m_extra > 0) m += extra * coef.tail(m_extra);
+    ThroughMaps(z, free, maps, coef, extra, offset_inside, m, slope);
     return (y - m).squaredNorm();
   };
   // One Gauss–Newton step: b after the maps has slope 1; inside them, the maps' slope; the
@@ -748,8 +760,7 @@ Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord
       return v;
     };
     const Eigen::VectorXd first_level = level_of(first, segments.front().second);
-    Eigen::VectorXd later_level;
-    if (segments.size() > 1) later_level = level_of(free, segments[1].second);
+    const Eigen::VectorXd later_level = level_of(free, segments[1].second);  // share_offset: 2 or more
     for (const auto& [start, len] : segments) {
       states.push_back(start == 0 ? &first : &free);
       sensors.push_back(SensorColumns(record, start, len, spec_.drift));
@@ -798,13 +809,8 @@ Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord
           const auto [start, len] = segments[j];
           const auto [from_own, c] = shifted_start(j, b);
           if (!from_own) continue;
-          const Eigen::MatrixXd& f = *states[j];
-          const long rows = std::min<long>(len, f.rows()), n = f.cols(), extra = sensors[j].cols();
-          Eigen::VectorXd m = y.segment(start, len);
-          if (n > 0) m.head(rows) += f.topRows(rows) * c.segment(1, n);
-          ApplyOutputMaps(maps, m, nullptr);
-          m.array() += b;
-          if (extra > 0) m += sensors[j] * c.tail(extra);
+          Eigen::VectorXd m;
+          ThroughMaps(y.segment(start, len), *states[j], maps, c, sensors[j], false, m, nullptr);
           score += (record.y.segment(start, len) - m).squaredNorm();
         }
         if (score < best_score) best_score = score, best_b = b;
