@@ -138,6 +138,30 @@ void ChooseFitScheme(const TransferFunction& g0, const std::vector<GapRecord>& e
 }
 
 // A reference candidate (none, or the refitted G0) as fitted, for the ranking.
+// The floor of what a candidate leaves: the noise floor's ARX estimator (gap_noise.h) on its
+// residual, y − ŷ as the records' output. On a nonlinear rig the one-step ARX predictor of y
+// misses the nonlinearity, and its floor is loose (an upper bound); once the candidate has taken
+// the nonlinearity out, what it leaves is white noise where nothing else is missing (the estimate
+// is then its MSE) and predictable where a second effect is. 0 where the floor is not an ARX
+// estimate (the periods' floor is exact) or the records are too short.
+double ResidualFloor(const FitContext& ctx, const CandidateWork& w, const NoiseFloor& floor) {
+  if (floor.method != "arx_prediction") return 0.0;
+  const Candidate cand(*ctx.g0, w.spec, ctx.scales, ctx.options->substeps);
+  std::vector<GapRecord> estimation = *ctx.estimation, validation = *ctx.validation;
+  for (GapRecord& r : estimation) r.y -= cand.Predict(w.x, r);
+  long offset = 0;
+  for (GapRecord& r : validation) {
+    r.y -= w.y_val.segment(offset, r.y.size());
+    offset += r.y.size();
+  }
+  try {
+    const NoiseFloor own = EstimateNoiseFloor(estimation, validation);
+    return own.sigma * own.sigma;
+  } catch (const std::invalid_argument&) {
+    return 0.0;
+  }
+}
+
 CandidateWork ReferenceWork(const Candidate& cand, const FitOutcome& fit, const Eigen::VectorXd& y_val,
                             const std::vector<GapRecord>& estimation) {
   CandidateWork w;
@@ -771,6 +795,14 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
         } else if (ResidualFollowsInput(validation, ctx.y_val - w.y_val, &input_note)) {
           report.notes.push_back(first + ": searched though its validation MSE is within the noise floor, since what it "
                                          "leaves follows the input (" + input_note + ")");
+        } else if (const double own = ResidualFloor(ctx, w, floor);
+                   own > 0 && !(w.fit.validation_mse <= own * SampleVarianceTolerance(n_val))) {
+          char line[320];
+          std::snprintf(line, sizeof line,
+                        "%s: searched though its validation MSE %.4g is within the noise floor %.4g (%s), since "
+                        "what it leaves is predictable: the same estimator on its residual reads %.4g",
+                        first.c_str(), w.fit.validation_mse, floor.sigma * floor.sigma, floor.method.c_str(), own);
+          report.notes.push_back(line);
         } else {
           char line[320];
           std::snprintf(line, sizeof line,
