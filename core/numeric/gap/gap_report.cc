@@ -137,7 +137,6 @@ void ChooseFitScheme(const TransferFunction& g0, const std::vector<GapRecord>& e
   if (ctx.nuisance.segment >= longest) ctx.nuisance.segment = 0;
 }
 
-// A reference candidate (none, or the refitted G0) as fitted, for the ranking.
 // The floor of what a candidate leaves: the noise floor's ARX estimator (gap_noise.h) on its
 // residual, y − ŷ as the records' output. On a nonlinear rig the one-step ARX predictor of y
 // misses the nonlinearity, and its floor is loose (an upper bound); once the candidate has taken
@@ -162,6 +161,7 @@ double ResidualFloor(const FitContext& ctx, const CandidateWork& w, const NoiseF
   }
 }
 
+// A reference candidate (none, or the refitted G0) as fitted, for the ranking.
 CandidateWork ReferenceWork(const Candidate& cand, const FitOutcome& fit, const Eigen::VectorXd& y_val,
                             const std::vector<GapRecord>& estimation) {
   CandidateWork w;
