@@ -759,7 +759,9 @@ Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord
         v.resize(0);
       return v;
     };
-    const Eigen::VectorXd first_level = level_of(first, segments.front().second);
+    // (A record scored from later on has no segment at sample 0, whose state `first` is.)
+    const Eigen::VectorXd first_level =
+        segments.front().first == 0 ? level_of(first, segments.front().second) : Eigen::VectorXd();
     const Eigen::VectorXd later_level = level_of(free, segments[1].second);  // share_offset: 2 or more
     for (const auto& [start, len] : segments) {
       states.push_back(start == 0 ? &first : &free);

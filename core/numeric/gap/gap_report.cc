@@ -776,21 +776,20 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
       // at 20 dB an actuator lag left a y², y³ sensor on validation at 1.04 times the floor, within
       // its tolerance of 1.045, and on the estimation records at 1.064 (`--pairs any --snr 20
       // --seed 6101` case 35; pooled 1.053 against 1.032).
-      const double pooled_mse =
-          (n_est * w.fit.estimation_mse + n_val * w.fit.validation_mse) / std::max<long>(1, n_est + n_val);
-      const bool pooled_within =
-          floor_known && pooled_mse <= floor.sigma * floor.sigma * SampleVarianceTolerance(n_est + n_val);
       if (searched == 0 && within_floor(w.fit.validation_mse)) {
+        const double pooled_mse =
+            (n_est * w.fit.estimation_mse + n_val * w.fit.validation_mse) / std::max<long>(1, n_est + n_val);
+        const double pooled_limit = floor.sigma * floor.sigma * SampleVarianceTolerance(n_est + n_val);
         std::string input_note;
         const std::string first = std::string("second effect after ") + EffectName(w.fit.effects.front().kind);
-        if (!pooled_within) {
+        if (!(pooled_mse <= pooled_limit)) {
           char line[320];
           std::snprintf(line, sizeof line,
                         "%s: searched though its validation MSE %.4g is within the noise floor %.4g (%s), since "
                         "on the estimation and validation records together it leaves %.4g, above the floor's "
                         "tolerance %.4g",
                         first.c_str(), w.fit.validation_mse, floor.sigma * floor.sigma, floor.method.c_str(),
-                        pooled_mse, floor.sigma * floor.sigma * SampleVarianceTolerance(n_est + n_val));
+                        pooled_mse, pooled_limit);
           report.notes.push_back(line);
         } else if (ResidualFollowsInput(validation, ctx.y_val - w.y_val, &input_note)) {
           report.notes.push_back(first + ": searched though its validation MSE is within the noise floor, since what it "
