@@ -14,8 +14,8 @@
 
 namespace idrig::gap_detail {
 
-// One discretisation per prediction, shared by the free response, the settled direction and a
-// rounded delay line (gap_internal.h).
+// One discretisation per prediction, shared by the free response, the settled direction and the
+// delay line's level before the record (gap_internal.h).
 StateSpace SampledUndelayed(const TransferFunction& plant, double ts) {
   TransferFunction g = plant;
   g.delay_s = 0;
@@ -121,14 +121,12 @@ double Pos(double v) { return std::exp(std::clamp(v, -30.0, 30.0)); }
 // the plant's zero-state response to an input of 1 over the first d samples and 0 after (the
 // fractional part of the delay in the sampled plant, as in simulation); n rows at most, fewer
 // where it has decayed (the caller treats missing rows as zeros). Empty without a whole-sample
-// delay: the line is then empty and x0 alone is the state. `rounded`: the delay as the
-// simulator takes it beside a feedback effect (whole samples, rounded; no fractional part), on
-// the delay-free realisation `undelayed` (SampledUndelayed) the caller already has.
-Eigen::VectorXd PreRecordResponse(const TransferFunction& plant, const StateSpace& undelayed, double ts, long n,
-                                  bool rounded) {
-  if (n <= 0 || !HasDelayLine(plant.delay_s, ts, rounded)) return Eigen::VectorXd();
-  const StateSpace d = rounded ? undelayed : DiscretizeZoh(ToStateSpace(plant), ts);
-  const long whole = std::lround((rounded ? plant.delay_s : d.delay_s) / ts);
+// delay: the line is then empty and x0 alone is the state. `undelayed`: the plant's delay-free
+// realisation (SampledUndelayed), for the size of its state.
+Eigen::VectorXd PreRecordResponse(const TransferFunction& plant, const StateSpace& undelayed, double ts, long n) {
+  if (n <= 0 || !HasDelayLine(plant.delay_s, ts)) return Eigen::VectorXd();
+  const StateSpace d = DiscretizeZoh(ToStateSpace(plant), ts);
+  const long whole = std::lround(d.delay_s / ts);
   if (whole <= 0) return Eigen::VectorXd();
   Eigen::VectorXd out(n), x = Eigen::VectorXd::Zero(d.A.rows());
   x.tail(d.A.rows() - undelayed.A.rows()).setOnes();  // a fractional delay's state: the previous input, c too
@@ -155,13 +153,11 @@ Eigen::MatrixXd WithPreRecord(const Eigen::MatrixXd& free, const Eigen::VectorXd
 }
 
 // The state columns of a record's first segment for a candidate of `spec` whose linear part is
-// `linear`: F and the delay line's level (beside friction or a cubic spring the simulator rounds
-// the delay to whole samples).
+// `linear`: F and the delay line's level.
 Eigen::MatrixXd FirstSegmentState(const CandidateSpec& spec, const TransferFunction& linear,
                                   const StateSpace& undelayed, double ts, long n, const Eigen::MatrixXd& free) {
   if (!spec.free_state || free.cols() == 0) return free;
-  const bool feedback = std::any_of(spec.kinds.begin(), spec.kinds.end(), IsFeedbackEffect);
-  return WithPreRecord(free, PreRecordResponse(linear, undelayed, ts, n, feedback));
+  return WithPreRecord(free, PreRecordResponse(linear, undelayed, ts, n));
 }
 
 // The nuisance coefficients of a rig settled at a constant input before the record, per unit of

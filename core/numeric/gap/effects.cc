@@ -359,7 +359,15 @@ EffectSimulator::EffectSimulator(const TransferFunction& plant, const std::vecto
     // force can stop the motion in one sub-step, and friction stays F_c·sign(dy/dt).
     const double cab = velocity_row_.dot(c.B.col(1));
     stick_ = velocity_input_ != 0.0 || std::abs(cab) > 1e-9 * velocity_row_.norm() * c.B.col(1).norm();
-    delay_ = std::lround(linear.delay_s / sample_time);
+    // The delay's whole samples in the line; its fractional part f moves the instant within each
+    // sample at which the drive sees the next command (Step). Rounded to whole samples instead,
+    // a fit's cost was a staircase in τ, flat between the steps, and a delay beside friction
+    // could not move from its start (`gap bench --seed 7102 --excitation steps --combos 0.5
+    // --pairs any` case 11: 4.9 samples, fitted as one).
+    const double samples = linear.delay_s / sample_time;
+    delay_ = static_cast<long>(std::floor(samples + 1e-12));
+    fraction_ = std::max(0.0, samples - static_cast<double>(delay_));
+    if (fraction_ < 1e-9) fraction_ = 0.0;
   } else {
     const SampledPlant p = Sample(linear, sample_time);
     A_ = p.A;
@@ -377,6 +385,7 @@ void EffectSimulator::Reset() {
   next_ = Eigen::VectorXd::Zero(A_.rows());
   delay_line_.assign(delay_, 0.0);
   delay_head_ = 0;
+  previous_input_ = 0.0;
   backlash_.assign(effects_.size(), play_state_);
 }
 
@@ -409,7 +418,8 @@ double EffectSimulator::Step(double u) {
       default: break;
     }
   }
-  // Whole-sample delay (a fractional part is in the sampled plant).
+  // Whole-sample delay (a fractional part is in the sampled plant, or beside a feedback effect in
+  // the sub-steps below).
   if (delay_ > 0) {
     const double delayed = delay_line_[delay_head_];
     delay_line_[delay_head_] = u;
@@ -418,8 +428,16 @@ double EffectSimulator::Step(double u) {
   }
   double y;
   if (feedback_) {
+    // A fractional delay f (in samples): the drive holds the previous command for the first f of
+    // the sample and this one after it; the sub-step across that instant is driven by their
+    // time-weighted mean (exact in the impulse it gives, O(h²) in the state), so the response,
+    // and a fit's cost, move smoothly with the delay.
+    const double previous = previous_input_, current = u;
+    previous_input_ = current;
     y = 0.0;
     for (int j = 0; j < substeps_; ++j) {
+      const double held = std::clamp(fraction_ * substeps_ - j, 0.0, 1.0);
+      u = held * previous + (1.0 - held) * current;
       double w = 0.0;  // the feedback forces on the mechanics
       for (const Effect& e : effects_)
         if (e.kind == EffectKind::kCubicStiffness) {

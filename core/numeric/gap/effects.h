@@ -134,7 +134,9 @@ class EffectSimulator {
   Eigen::RowVectorXd C_, velocity_row_, velocity_next_;
   double velocity_drive_ = 0.0, velocity_force_ = 0.0;
   double D_ = 0.0, velocity_input_ = 0.0;
-  long delay_ = 0;
+  long delay_ = 0;             // whole samples in the line
+  double fraction_ = 0.0;      // the delay's fractional part in samples, beside a feedback effect
+  double previous_input_ = 0.0;  // the line's output one sample ago (held for fraction_ of a sample)
   std::vector<double> delay_line_;
   long delay_head_ = 0;
   std::vector<double> backlash_;  // play-operator state per effect (used by backlash)

@@ -201,13 +201,10 @@ bool BinaryInput(const std::vector<GapRecord>& records);
 // MSE of n samples may come out than the variance it estimates and still be that variance.
 inline double SampleVarianceTolerance(long n) { return 1 + 2 * std::sqrt(2.0 / std::max<long>(1, n)); }
 
-// Whether a delay of `delay_s` fills a line of a whole sample or more at sample time ts, as the
-// simulator takes it: its whole part, or beside friction or a cubic spring (`rounded`) the delay
-// rounded to whole samples. Such a line holds a free level before the record (PreRecordResponse).
-inline bool HasDelayLine(double delay_s, double ts, bool rounded) {
-  const double samples = delay_s / ts;
-  return (rounded ? std::round(samples) : std::floor(samples + 1e-12)) >= 1;
-}
+// Whether a delay of `delay_s` fills a line of a whole sample or more at sample time ts (its
+// whole part, as the simulator takes it). Such a line holds a free level before the record
+// (PreRecordResponse).
+inline bool HasDelayLine(double delay_s, double ts) { return std::floor(delay_s / ts + 1e-12) >= 1; }
 
 // Whether the input explains a validation residual (concatenated over the records' scored
 // samples, as Stack makes it): the prewhitened test of validation.h, AR(10), lags 0..20 and

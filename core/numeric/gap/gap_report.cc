@@ -1037,15 +1037,11 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
   }
 
   // The reported model's delay line holds a free level before each record (PreRecordResponse,
-  // candidate_fit.cc) where its delay is a whole sample or more (rounded beside friction or a
-  // cubic spring, as the simulator takes it there).
+  // candidate_fit.cc) where its delay is a whole sample or more.
   double delay = v.plant.delay_s;
-  bool feedback = false;
-  for (const Effect& e : v.effects) {
+  for (const Effect& e : v.effects)
     if (e.kind == EffectKind::kTimeDelay && !e.params.empty()) delay += e.params[0];
-    feedback = feedback || IsFeedbackEffect(e.kind);
-  }
-  if (HasDelayLine(delay, ts, feedback))
+  if (HasDelayLine(delay, ts))
     v.nuisance.initial_state += "; the model's delay line also holds a free input level at the start of each record";
   if (std::any_of(v.effects.begin(), v.effects.end(), [](const Effect& e) { return e.kind == EffectKind::kBacklash; }))
     v.nuisance.initial_state += "; the backlash's play starts where it was left before each record (the best of a "
