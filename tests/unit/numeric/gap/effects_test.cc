@@ -142,6 +142,33 @@ TEST(EffectsTest, TimeDelayShiftsTheResponse) {
   for (int k = 1; k < n; ++k) EXPECT_NEAR(step(k), 2 * (1 - std::exp(-3 * (k * ts - 0.025))), 1e-12);
 }
 
+// Beside a feedback effect the simulator runs in sub-steps with the force inside; a delay there
+// keeps its fractional part (the drive holds the previous command for that share of the sample).
+// With a cubic spring too weak to matter, the response must be the exact ZOH discretisation's with
+// the fractional delay (the linear path, an independent method): to rounding where the instant
+// falls on a sub-step's edge (2.5 and 3.75 samples at 16 sub-steps), within 10^-4 of the peak where
+// a sub-step is blended (0.3). Rounded to whole samples, as it was, 2.5 samples read as 3 and the
+// fit's cost was a staircase in τ.
+TEST(EffectsTest, ADelayBesideAFeedbackEffectKeepsItsFractionalPart) {
+  TransferFunction plant;  // 25/(s² + 5s + 25)
+  plant.num = Eigen::VectorXd::Constant(1, 25.0);
+  plant.den = Eigen::Vector3d(1.0, 5.0, 25.0);
+  const double ts = 0.02;
+  const int n = 400;
+  Eigen::VectorXd u(n);
+  for (int k = 0; k < n; ++k) u(k) = (k / 37) % 2 == 0 ? 1.0 : -0.6;
+  const double peak = SimulateWithEffect(plant, {}, u, ts).cwiseAbs().maxCoeff();
+  for (const double samples : {0.3, 1.0, 2.5, 3.75}) {
+    const Effect delay{EffectKind::kTimeDelay, {samples * ts}};
+    const Eigen::VectorXd exact = SimulateWithEffect(plant, delay, u, ts);
+    EffectSimulationOptions fine;
+    fine.substeps = 16;
+    const Eigen::VectorXd fed =
+        SimulateWithEffects(plant, {delay, Effect{EffectKind::kCubicStiffness, {1e-12}}}, u, ts, fine);
+    EXPECT_LT((fed - exact).cwiseAbs().maxCoeff(), 1e-4 * peak) << samples << " samples";
+  }
+}
+
 // A delay far beyond any record (a delay candidate's fit wandering to its parameter bound, on
 // an integrating plant) was an 85 TB delay line and an OOM kill; now a clear error.
 TEST(EffectsTest, ADelayOfMoreThanAHundredMillionSamplesIsRefusedNotAllocated) {
