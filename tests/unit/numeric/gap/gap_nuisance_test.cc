@@ -919,6 +919,20 @@ TEST(GapPairTest, ADelayBesideFrictionIsFoundFromG0AsGiven) {
   ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.05);
 }
 
+TEST(GapPairTest, ADelayBesideFrictionMovesOffItsWholeSamples) {
+  // `idrig gap bench --seed 7102 --offsets --combos 0.5 --pairs any --excitation steps`, case 11: a
+  // delay of 4.9 samples beside Coulomb friction on a third-order plant. Beside a feedback effect
+  // the simulator rounded the delay to whole samples, the fit's cost was flat between them, and
+  // the pair's delay stayed at its start of one sample (LR 1384) while a resonance was named beside
+  // the friction (LR 5671). With the fractional part kept (effects.cc) the delay moves to its value.
+  const std::vector<EffectKind> truth = BenchCaseTruth(11, 0.5, true);
+  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kTimeDelay, EffectKind::kCoulombFriction}))
+      << "the bench's pair 11 moved";
+  const GapCase c = OffsetBenchCase(7102, 11, truth, false, "steps");
+  const GapVerdict v = DiagnoseTheTruthAtTheFloor(c, "delay of 4.9 samples + friction, steps");
+  ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.05);
+}
+
 // `idrig gap bench --cases N --seed SEED --offsets --combos F [--pairs any] [--plants P] --snr
 // 20`, case `index` (its pair `expected`): the first effect leaves the validation records within
 // the floor, and the second is searched even so. The note that says why (`why`) must be there for
