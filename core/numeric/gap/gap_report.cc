@@ -146,13 +146,12 @@ void ChooseFitScheme(const TransferFunction& g0, const std::vector<GapRecord>& e
 double ResidualFloor(const FitContext& ctx, const CandidateWork& w, const NoiseFloor& floor) {
   if (floor.method != "arx_prediction") return 0.0;
   const Candidate cand(*ctx.g0, w.spec, ctx.scales, ctx.options->substeps);
+  // Every sample of every record, also those a validation record does not score (a record split in
+  // time is scored from its middle, and its predictor's regressors reach back before that); w.y_val
+  // holds only the scored samples.
   std::vector<GapRecord> estimation = *ctx.estimation, validation = *ctx.validation;
-  for (GapRecord& r : estimation) r.y -= cand.Predict(w.x, r);
-  long offset = 0;
-  for (GapRecord& r : validation) {
-    r.y -= w.y_val.segment(offset, r.y.size());
-    offset += r.y.size();
-  }
+  for (std::vector<GapRecord>* set : {&estimation, &validation})
+    for (GapRecord& r : *set) r.y -= cand.Predict(w.x, r);
   try {
     const NoiseFloor own = EstimateNoiseFloor(estimation, validation);
     return own.sigma * own.sigma;

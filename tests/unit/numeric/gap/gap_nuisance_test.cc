@@ -933,6 +933,26 @@ TEST(GapPairTest, ADelayBesideFrictionMovesOffItsWholeSamples) {
   ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.05);
 }
 
+TEST(GapPairTest, ARecordSplitInTimeWeighsItsFirstEffectsResidualOverTheWholeRecord) {
+  // One record, no validation record: the diagnosis splits it in time, and the validation record is
+  // the whole record scored from its middle. The floor of what the first effect leaves
+  // (ResidualFloor, gap_report.cc) took the stacked validation prediction, which holds only the
+  // scored samples, as if it held the whole record, and read past its end (half a record of
+  // memory that was not the prediction). It now predicts every sample of every record.
+  // `--seed 7101 --combos 0.5 --pairs any`, case 4: a delay, named alone, within the floor.
+  const std::vector<EffectKind> truth = BenchCaseTruth(4, 0.5, true);
+  ASSERT_EQ(truth, std::vector<EffectKind>{EffectKind::kTimeDelay}) << "the bench's case 4 moved";
+  const GapCase c = OffsetBenchCase(7101, 4, truth);
+  GapOptions options;
+  options.threads = 1;
+  const GapReport report = DiagnoseGap(c.sim, {c.estimation}, {}, options);
+  EXPECT_EQ(report.verdict.effect, "time_delay");
+  EXPECT_EQ(report.verdict.effects.size(), 1u);
+  const std::string skipped = LastNoteWith(report, "second effect after time_delay: not searched");
+  EXPECT_FALSE(skipped.empty()) << "the second-effect search was not skipped within the floor";
+  ExpectParameterNear(report.verdict, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.05);
+}
+
 // `idrig gap bench --cases N --seed SEED --offsets --combos F [--pairs any] [--plants P] --snr
 // 20`, case `index` (its pair `expected`): the first effect leaves the validation records within
 // the floor, and the second is searched even so. The note that says why (`why`) must be there for
