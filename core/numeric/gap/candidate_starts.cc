@@ -93,7 +93,7 @@ std::vector<std::vector<double>> GridStarts(EffectKind kind, const Scales& s) {
 // q/2). A q that is no multiple of the best is not taken however high its R: on an output held
 // at a few levels a q a fifth off the step lines up half of the samples (R 0.53 against 1.00,
 // `--pairs any --integrating --seed 972` case 50, which made the lattice fail its 95 % test).
-double QuantisationStep(const std::vector<GapRecord>& records, double* strength) {
+double QuantisationStep(const std::vector<GapRecord>& records, double* strength, int threads) {
   std::vector<double> y;
   for (const auto& r : records)
     for (long k = r.score_from; k < r.y.size(); ++k) y.push_back(r.y(k));
@@ -106,12 +106,15 @@ double QuantisationStep(const std::vector<GapRecord>& records, double* strength)
   };
   // Coarse logarithmic grid span/3000 … span/3 (0.35 % apart: a lattice of up to ~300 steps
   // stays in phase), then a fine search around the chosen step.
-  std::vector<std::pair<double, double>> table;
-  const int grid = 2000;
-  for (int i = 0; i < grid; ++i) {
-    const double q = span * std::pow(10.0, -3.5 + 3.0 * i / (grid - 1));
-    table.push_back({q, resultant(q)});
-  }
+  // (2000 steps × N samples of exp(2πi y/q): on 10^4 samples 0.4 s, ahead of every candidate.)
+  const int grid = 2000, chunks = 8;
+  std::vector<std::pair<double, double>> table(grid);
+  ParallelFor(chunks, threads, [&](size_t c) {
+    for (int i = static_cast<int>(c) * grid / chunks; i < (static_cast<int>(c) + 1) * grid / chunks; ++i) {
+      const double q = span * std::pow(10.0, -3.5 + 3.0 * i / (grid - 1));
+      table[i] = {q, resultant(q)};
+    }
+  }, [](size_t) { return std::string("scoring quantisation steps"); });
   size_t at = 0;
   for (size_t i = 0; i < table.size(); ++i)
     if (table[i].second > table[at].second) at = i;

@@ -168,7 +168,8 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   };
   std::vector<CandidateWork> pairs(seconds.size());
   ParallelFor(seconds.size(), ctx.options->threads, [&](size_t i) { pairs[i] = fit_pair(seconds[i]); },
-              [&](size_t i) { return std::string("fitting ") + EffectName(k1) + " with " + EffectName(seconds[i]); });
+              [&](size_t i) { return std::string("fitting ") + EffectName(k1) + " with " + EffectName(seconds[i]); },
+              [&](size_t i) { return FitCost(seconds[i]); });
 
   const GapOptions& options = *ctx.options;
   const CandidateFit& one = first.fit;

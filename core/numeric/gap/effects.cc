@@ -423,7 +423,7 @@ double EffectSimulator::Step(double u) {
   if (delay_ > 0) {
     const double delayed = delay_line_[delay_head_];
     delay_line_[delay_head_] = u;
-    delay_head_ = (delay_head_ + 1) % delay_;
+    if (++delay_head_ == delay_) delay_head_ = 0;
     u = delayed;
   }
   double y;

@@ -138,8 +138,18 @@ class Candidate {
                                  long* taken_up = nullptr) const;
 
  private:
+  // What a prediction's nuisance fit needs of the linear part at x on segments of up to `longest`
+  // samples: the free response F, the first segment's state columns (F and the delay line's
+  // level) and, behind a |y| sensor, the settled direction. The same for every play state
+  // (Predict computes it once for them all).
+  struct FreeRows {
+    long longest = -1;
+    Eigen::MatrixXd free, first;
+    Eigen::VectorXd settled;
+  };
+  FreeRows Rows(const Eigen::VectorXd& x, double sample_time, long longest, bool absolute_sensor) const;
   Eigen::VectorXd PredictFrom(const Eigen::VectorXd& x, const GapRecord& record, Nuisance* nuisance,
-                              double play_state) const;
+                              double play_state, FreeRows* rows = nullptr) const;
   TransferFunction base_;
   CandidateSpec spec_;
   Scales scales_;
@@ -191,7 +201,8 @@ FitOutcome Minimise(const Residuals& residuals, Eigen::VectorXd x, int max_evalu
 std::vector<std::vector<double>> Starts(EffectKind kind, const Scales& s);
 
 // Candidate quantisation step from the samples' lattice; *strength = its mean resultant length.
-double QuantisationStep(const std::vector<GapRecord>& records, double* strength);
+// The grid of steps is scored on up to `threads` threads (the same result on any number).
+double QuantisationStep(const std::vector<GapRecord>& records, double* strength, int threads = 1);
 // In place: y → E[q·round((y + n)/q)], n ~ N(0, s²) (the quantisation candidate's predictor).
 void SmoothedStaircase(Eigen::VectorXd& y, double q, double s);
 
@@ -422,8 +433,17 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
 void AdoptCandidate(const CandidateFit& c, GapVerdict& v);
 
 // body(i) for i < count on up to `threads` threads (0: hardware); an exception is rethrown as
-// std::invalid_argument naming what(i).
+// std::invalid_argument naming what(i). With `cost` the items start in order of decreasing
+// cost(i) (longest first: the costliest fit does not start last and hold the others' threads
+// idle); the results never depend on the order.
 void ParallelFor(size_t count, int threads, const std::function<void(size_t)>& body,
-                 const std::function<std::string(size_t)>& what);
+                 const std::function<std::string(size_t)>& what,
+                 const std::function<double(size_t)>& cost = nullptr);
+
+// The relative cost of fitting an effect (as one of a candidate's effects), for ParallelFor's
+// order: the sensor map fits two variants, each through a Gauss–Newton nuisance fit per segment;
+// friction and a cubic spring run sub-steps; a backlash predicts each record from several play
+// states; the output clip's nuisance goes through the clip.
+double FitCost(EffectKind kind);
 
 }  // namespace idrig::gap_detail

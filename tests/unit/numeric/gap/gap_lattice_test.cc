@@ -27,6 +27,9 @@ TEST(GapLatticeTest, FindsTheStepAndOffsetOfAnAdcEvenWithNoiseAsLargeAsTheStep) 
     double strength = 0;
     const double step = gap_detail::QuantisationStep({c.estimation}, &strength);
     EXPECT_NEAR(step, q, 0.002 * q) << "SNR " << snr;
+    double strength_2 = 0;  // the grid scored on two threads: the same step to the bit
+    EXPECT_EQ(gap_detail::QuantisationStep({c.estimation}, &strength_2, 2), step);
+    EXPECT_EQ(strength_2, strength);
     const NoiseFloor floor = EstimateNoiseFloor({c.estimation}, {c.validation});
     const OutputLattice l = DetectOutputLattice({c.estimation, c.validation}, step, floor.sigma);
     EXPECT_TRUE(l.lattice) << l.reason;

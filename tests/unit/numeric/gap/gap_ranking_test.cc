@@ -5,10 +5,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "core/numeric/gap/gap_internal.h"
 
@@ -92,6 +96,36 @@ TEST(GapMaskTest, DynamicsNoRecordCanShowAreSetAside) {
   for (size_t i = 0; i < work.size(); ++i) {
     EXPECT_EQ(work[i].masked, expected[i]) << "candidate " << i << ": " << work[i].fit.note;
     EXPECT_EQ(work[i].fit.note.empty(), !expected[i]) << "candidate " << i;
+  }
+}
+
+}  // namespace
+}  // namespace idrig::gap_detail
+
+// The candidates' schedule (ParallelFor): every item runs once, in order of decreasing cost on
+// one thread (the costliest fit starts first), on two threads as well, and an item that throws
+// is named in the error. Reference: the order the costs give, and the item that threw.
+namespace idrig::gap_detail {
+namespace {
+
+TEST(GapScheduleTest, TheCostliestItemsStartFirstAndEveryItemRunsOnce) {
+  const std::vector<double> cost = {1.0, 4.0, 2.0, 0.0, 2.0};
+  std::vector<size_t> order;
+  ParallelFor(cost.size(), 1, [&](size_t i) { order.push_back(i); }, [](size_t) { return std::string(); },
+              [&](size_t i) { return cost[i]; });
+  EXPECT_EQ(order, (std::vector<size_t>{1, 2, 4, 0, 3}));  // ties in their given order
+
+  std::vector<std::atomic<int>> runs(40);
+  ParallelFor(runs.size(), 2, [&](size_t i) { ++runs[i]; }, [](size_t) { return std::string(); },
+              [](size_t i) { return double(i % 7); });
+  for (const auto& r : runs) EXPECT_EQ(r.load(), 1);
+
+  try {
+    ParallelFor(cost.size(), 2, [](size_t i) { if (i == 2) throw std::runtime_error("no fit"); },
+                [](size_t i) { return "fitting item " + std::to_string(i); }, [&](size_t i) { return cost[i]; });
+    ADD_FAILURE() << "the failing item was not reported";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("fitting item 2 failed: no fit"), std::string::npos) << e.what();
   }
 }
 
