@@ -66,22 +66,31 @@ double Sign(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0); }
 
 // x+ = A x + B u + F w, and a row times x, as plain loops: for the few states of a plant
 // Eigen's general matrix–vector kernel costs more in dispatch than in arithmetic (a third of
-// a diagnosis's time went there).
-void Advance(const Eigen::MatrixXd& a, const Eigen::VectorXd& x, const Eigen::VectorXd& b, double u,
-             const Eigen::VectorXd& f, double w, Eigen::VectorXd& next) {
-  const long n = x.size();
+// a diagnosis's time went there). N > 0: a loop of fixed length N, which the compiler unrolls
+// (EffectSimulator::Step chooses N once per sample for up to 6 states); N = 0: x.size(). The
+// same operations in the same order either way, so the same result to the bit.
+template <int N>
+[[gnu::always_inline]] inline void Advance(const Eigen::MatrixXd& a, const Eigen::VectorXd& x,
+                                           const Eigen::VectorXd& b, double u, const Eigen::VectorXd& f,
+                                           double w, Eigen::VectorXd& next) {
+  const long n = N > 0 ? N : x.size();
   const double* pa = a.data();
-  for (long i = 0; i < n; ++i) next[i] = b[i] * u + f[i] * w;
+  const double *px = x.data(), *pb = b.data(), *pf = f.data();
+  double* pn = next.data();
+  for (long i = 0; i < n; ++i) pn[i] = pb[i] * u + pf[i] * w;
   for (long j = 0; j < n; ++j) {
-    const double xj = x[j];
+    const double xj = px[j];
     const double* col = pa + j * n;
-    for (long i = 0; i < n; ++i) next[i] += col[i] * xj;
+    for (long i = 0; i < n; ++i) pn[i] += col[i] * xj;
   }
 }
 
-double Dot(const Eigen::RowVectorXd& r, const Eigen::VectorXd& x) {
+template <int N>
+[[gnu::always_inline]] inline double Dot(const Eigen::RowVectorXd& r, const Eigen::VectorXd& x) {
+  const long n = N > 0 ? N : x.size();
+  const double *pr = r.data(), *px = x.data();
   double s = 0.0;
-  for (long i = 0; i < x.size(); ++i) s += r[i] * x[i];
+  for (long i = 0; i < n; ++i) s += pr[i] * px[i];
   return s;
 }
 
@@ -397,14 +406,28 @@ void EffectSimulator::Reset() {
 // this does not chatter at reversals, so the result does not depend on the sub-step (a mass
 // below its breakaway force does not creep). `w` is the other force on the mechanics (the
 // cubic spring's) in this sub-step.
+template <int N>
 double EffectSimulator::FrictionForce(double u, double w, double limit) const {
   const double gain = velocity_force_ + velocity_input_;  // ∂(dy/dt)_next / ∂f
-  if (!stick_ || !(std::abs(gain) > 1e-300)) return limit * Sign(Dot(velocity_row_, x_) + velocity_input_ * (u + w));
-  const double moving = Dot(velocity_next_, x_) + velocity_drive_ * u + velocity_force_ * w + velocity_input_ * (u + w);
+  if (!stick_ || !(std::abs(gain) > 1e-300)) return limit * Sign(Dot<N>(velocity_row_, x_) + velocity_input_ * (u + w));
+  const double moving = Dot<N>(velocity_next_, x_) + velocity_drive_ * u + velocity_force_ * w + velocity_input_ * (u + w);
   return std::clamp(moving / gain, -limit, limit);
 }
 
 double EffectSimulator::Step(double u) {
+  switch (x_.size()) {
+    case 1: return StepN<1>(u);
+    case 2: return StepN<2>(u);
+    case 3: return StepN<3>(u);
+    case 4: return StepN<4>(u);
+    case 5: return StepN<5>(u);
+    case 6: return StepN<6>(u);
+    default: return StepN<0>(u);
+  }
+}
+
+template <int N>
+double EffectSimulator::StepN(double u) {
   // Input side: static maps and the play operator, in the order given.
   for (size_t i = 0; i < effects_.size(); ++i) {
     const auto& p = effects_[i].params;
@@ -441,18 +464,18 @@ double EffectSimulator::Step(double u) {
       double w = 0.0;  // the feedback forces on the mechanics
       for (const Effect& e : effects_)
         if (e.kind == EffectKind::kCubicStiffness) {
-          const double position = Dot(C_, x_) + D_ * u;
+          const double position = Dot<N>(C_, x_) + D_ * u;
           w -= e.params[0] * position * position * position;
         }
       for (const Effect& e : effects_)
-        if (e.kind == EffectKind::kCoulombFriction) w -= FrictionForce(u, w, e.params[0]);
-      if (j == 0) y = Dot(C_, x_) + D_ * (u + w);
-      Advance(A_, x_, B_, u, force_B_, w, next_);
+        if (e.kind == EffectKind::kCoulombFriction) w -= FrictionForce<N>(u, w, e.params[0]);
+      if (j == 0) y = Dot<N>(C_, x_) + D_ * (u + w);
+      Advance<N>(A_, x_, B_, u, force_B_, w, next_);
       x_.swap(next_);
     }
   } else {
-    y = Dot(C_, x_) + D_ * u;
-    Advance(A_, x_, B_, u, force_B_, 0.0, next_);
+    y = Dot<N>(C_, x_) + D_ * u;
+    Advance<N>(A_, x_, B_, u, force_B_, 0.0, next_);
     x_.swap(next_);
   }
   // Output side, in the order given.

@@ -123,7 +123,11 @@ class EffectSimulator {
  private:
   // The friction force on the mechanics in this sub-step for driving input u and other force w
   // (effects.cc).
+  template <int N>
   double FrictionForce(double u, double w, double limit) const;
+  // Step for a state of N (1–6; 0: any) elements, which Step chooses.
+  template <int N>
+  double StepN(double u);
 
   std::vector<Effect> effects_;
   bool feedback_ = false;
