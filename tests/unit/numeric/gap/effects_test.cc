@@ -126,6 +126,34 @@ TEST(EffectsTest, ActuatorLagMatchesTheClosedFormStepResponse) {
   }
 }
 
+// The simulator's state update has a fixed-size form for up to 6 states and a general one above
+// (EffectSimulator::Step): a chain of k unit lags 1/(s + 1)^k to a unit step, 1 − e^(−t)·Σ_{i<k}
+// tⁱ/i!, for k = 3 and k = 8, on the linear path and on the sub-step path of the feedback effects
+// (friction with F_c = 0: a force of zero, ZOH still exact at the samples).
+TEST(EffectsTest, AChainOfLagsMatchesItsClosedFormOnEitherSizeOfState) {
+  const double ts = 0.1;
+  const int n = 150;
+  const Eigen::VectorXd u = Eigen::VectorXd::Ones(n);
+  for (int order : {3, 8}) {
+    TransferFunction chain;
+    chain.num = Eigen::VectorXd::Ones(1);
+    chain.den = Eigen::VectorXd::Zero(order + 1);
+    for (int i = 0; i <= order; ++i) chain.den(i) = std::tgamma(order + 1.0) / (std::tgamma(i + 1.0) * std::tgamma(order - i + 1.0));
+    for (const Effect& effect : {Effect{EffectKind::kNone, {}}, Effect{EffectKind::kCoulombFriction, {0.0}}}) {
+      const Eigen::VectorXd y = SimulateWithEffect(chain, effect, u, ts);
+      for (int k = 0; k < n; ++k) {
+        const double t = k * ts;
+        double sum = 0, term = 1;
+        for (int i = 0; i < order; ++i) {
+          sum += term;  // tⁱ/i!
+          term *= t / (i + 1);
+        }
+        EXPECT_NEAR(y(k), 1 - std::exp(-t) * sum, 1e-9) << "order " << order << ", " << EffectName(effect.kind) << ", k = " << k;
+      }
+    }
+  }
+}
+
 TEST(EffectsTest, TimeDelayShiftsTheResponse) {
   const double ts = 0.1;
   const int n = 100;
