@@ -279,26 +279,6 @@ Eigen::VectorXd Backlash(const Eigen::VectorXd& u, double half_width) {
   return w;
 }
 
-double SensorMap(double y, const std::vector<double>& p) {
-  if (p[3] != 0.0) return p[0] * std::abs(y);
-  return y * (p[0] + y * (p[1] + y * p[2]));
-}
-
-double OutputMap(const Effect& e, double y, double* slope) {
-  const auto& p = e.params;
-  switch (e.kind) {
-    case EffectKind::kOutputSaturation:
-      if (slope) *slope = y > p[0] && y < p[1] ? 1.0 : 0.0;
-      return std::clamp(y, p[0], p[1]);
-    case EffectKind::kSensorNonlinearity:
-      if (slope) *slope = p[3] != 0.0 ? p[0] * (y < 0 ? -1.0 : 1.0) : p[0] + y * (2 * p[1] + 3 * p[2] * y);
-      return SensorMap(y, p);
-    default:
-      if (slope) *slope = 1.0;
-      return y;
-  }
-}
-
 EffectSimulator::EffectSimulator(const TransferFunction& plant, const Effect& effect,
                                  double sample_time, const EffectSimulationOptions& options)
     : EffectSimulator(plant, std::vector<Effect>{effect}, sample_time, options) {}

@@ -28,6 +28,8 @@
 // the plant's input when its relative degree is ≤ 2, else the input of its slowest two poles
 // behind the rest of the plant (the drive). Everything here is Eigen-only and I/O-free.
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -162,10 +164,29 @@ Eigen::VectorXd SimulateWithEffects(const TransferFunction& plant, const std::ve
 double DeadZone(double u, double width);
 // Play operator of half-width r over a whole sequence, starting from w = clip(0, u0 ± r).
 Eigen::VectorXd Backlash(const Eigen::VectorXd& u, double half_width);
-double SensorMap(double y, const std::vector<double>& params);  // sensor_nonlinearity
+// sensor_nonlinearity: k·|y| where params[3] ≠ 0, else the polynomial y·(a + b·y + c·y²).
+inline double SensorMap(double y, const std::vector<double>& p) {
+  if (p[3] != 0.0) return p[0] * std::abs(y);
+  return y * (p[0] + y * (p[1] + y * p[2]));
+}
 // An output-side static map (output_saturation or sensor_nonlinearity) at y, and its slope
 // d map/dy there when asked (0 where the saturation clips); y itself, slope 1, for any other
-// effect. The simulator, the bench's rig and the diagnosis's nuisance fit all apply it.
-double OutputMap(const Effect& effect, double y, double* slope = nullptr);
+// effect. The simulator, the bench's rig and the diagnosis's nuisance fit all apply it, the last
+// on every sample of every segment of every prediction behind a map: inline, so that the call
+// costs nothing there (out of line it took a sixth of a diagnosis's time).
+inline double OutputMap(const Effect& e, double y, double* slope = nullptr) {
+  const auto& p = e.params;
+  switch (e.kind) {
+    case EffectKind::kOutputSaturation:
+      if (slope) *slope = y > p[0] && y < p[1] ? 1.0 : 0.0;
+      return std::clamp(y, p[0], p[1]);
+    case EffectKind::kSensorNonlinearity:
+      if (slope) *slope = p[3] != 0.0 ? p[0] * (y < 0 ? -1.0 : 1.0) : p[0] + y * (2 * p[1] + 3 * p[2] * y);
+      return SensorMap(y, p);
+    default:
+      if (slope) *slope = 1.0;
+      return y;
+  }
+}
 
 }  // namespace idrig
