@@ -56,6 +56,10 @@ struct GapOptions {
   std::vector<EffectKind> candidates;  // empty: every effect of the library
   int threads = 0;               // candidates fitted in parallel; 0: one per hardware thread
   bool second_effect = true;     // forward selection of a second effect after the first
+  // Under multiple shooting, a second effect searched from the first even where the first reaches
+  // the noise floor (each segment's free state takes up part of what a second effect does); a
+  // pair found so is kept only when the diagnosis on segments twice as long names it too.
+  bool second_effect_at_floor = true;
   bool check_linear_order = true;  // test a higher-order linear part (unmodelled_dynamics)
   // The fit scheme, when it must not be chosen from G0: samples per shooting segment (0: single
   // shooting) and whether G0 integrates. The diagnosis on a higher-order linear part keeps the
@@ -222,6 +226,9 @@ struct GapReport {
   GapWhere where;
   std::vector<std::string> notes;     // what was assumed (e.g. "split in time at 50 %")
   int estimation_samples = 0, validation_samples = 0;
+  // The verdict's second effect was searched though its first reached the noise floor
+  // (GapOptions::second_effect_at_floor), and awaits its confirmation on longer segments.
+  bool second_at_floor = false;
   // The verdict's simulation of the validation records (their scored samples, stacked): the
   // fitted candidate, pair or higher-order part the verdict names (a quantiser named from the
   // lattice alone, with nothing fitted, leaves it at what was fitted before).

@@ -321,6 +321,7 @@ bool AdoptHigherOrder(const FitContext& ctx, const LinearOrderCheck& check, cons
   // The same fit scheme as here (the part of order n0 + 2 may decay faster than G0, and would get
   // single shooting): its NRMSEs and BICs are compared with this diagnosis's.
   inner_options.fixed_segment = ctx.nuisance.segment;
+  inner_options.second_effect_at_floor = false;  // its pair could not be confirmed on longer segments
   inner_options.fixed_integrating = ctx.integrating;
   GapReport after;
   try {
