@@ -1120,7 +1120,7 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   const auto diagnose_once = [&](const std::vector<GapRecord>& est, const std::vector<GapRecord>& val,
                                  const GapOptions& opts, const GapReport& seed) {
     GapReport report = DiagnoseGapOnce(sim_model, est, val, opts, seed);
-    if (!report.second_at_floor || opts.fixed_segment >= 0) return report;
+    if (!report.second_at_floor || opts.fixed_segment >= 0 || report.verdict.effects.size() < 2) return report;
     const GapVerdict& v = report.verdict;
     GapOptions longer = opts;
     longer.fixed_segment = 2 * v.shooting_segment;
