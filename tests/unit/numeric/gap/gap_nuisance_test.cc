@@ -233,6 +233,16 @@ GapCase OffsetBenchCase(uint64_t seed, int index, const std::vector<EffectKind>&
 
 GapCase IntegratingBenchCase(EffectKind truth, int index) { return OffsetBenchCase(44, index, {truth}, true); }
 
+// `idrig gap bench --seed SEED --integrating --process-noise 0.5 --offsets`, case `index`.
+GapCase ProcessNoiseBenchCase(uint64_t seed, int index, EffectKind truth) {
+  std::mt19937_64 rng(BenchCaseSeed(seed, index));
+  GapCaseOptions options;
+  options.offsets = true;
+  options.integrating = true;
+  options.process_noise = 0.5;
+  return MakeGapCase(truth, rng, options);
+}
+
 // The diagnosis as the bench runs it (one thread; the result does not depend on it).
 GapReport DiagnoseOnOneThread(const GapCase& c, bool fit_drift = true) {
   GapOptions options;
@@ -657,12 +667,7 @@ TEST(GapProcessNoiseTest, AGainErrorThatMatchesTheGapIsNotCheckedOnShorterSegmen
 class GapIntegratingProcessNoiseTest : public ::testing::TestWithParam<int> {};
 
 TEST_P(GapIntegratingProcessNoiseTest, AWalkWithinTheShootingSegmentsIsNotAnEffect) {
-  std::mt19937_64 rng(BenchCaseSeed(2002, GetParam()));
-  GapCaseOptions options;
-  options.offsets = true;
-  options.integrating = true;
-  options.process_noise = 0.5;
-  const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
+  const GapCase c = ProcessNoiseBenchCase(2002, GetParam(), EffectKind::kNone);
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
   const std::string again = LastNoteWith(report, "diagnosed again with segments of");
@@ -688,12 +693,7 @@ INSTANTIATE_TEST_SUITE_P(Seed2002, GapIntegratingProcessNoiseTest, ::testing::Va
 // each folding segment's b is therefore scored on the whole record first. The verdict must be
 // the |y| sensor.
 TEST(GapAbsoluteSensorTest, AnIntegratingRigKeepsOneSensorOffsetForTheRecord) {
-  std::mt19937_64 rng(BenchCaseSeed(2005, 24));
-  GapCaseOptions options;
-  options.offsets = true;
-  options.integrating = true;
-  options.process_noise = 0.5;
-  const GapCase c = MakeGapCase(EffectKind::kSensorNonlinearity, rng, options);
+  const GapCase c = ProcessNoiseBenchCase(2005, 24, EffectKind::kSensorNonlinearity);
   ASSERT_EQ(c.effects.size(), 1u);
   ASSERT_TRUE(IsAbsoluteSensor(c.effects.front()));
   const GapReport report = DiagnoseOnOneThread(c);
@@ -1228,12 +1228,7 @@ TEST(GapIntegratingTest, APairAtTheFloorThatLongerSegmentsDoNotFindIsDropped) {
   // floor; searched at the floor, a cubic spring passes beside it (LR 21.1 against 11.4,
   // validation gain z 3.3) on segments of 500 samples: it follows the walk within the segments.
   // The diagnosis on segments of 1000 does not name it, so the backlash stands alone.
-  std::mt19937_64 rng(BenchCaseSeed(2005, 7));
-  GapCaseOptions options;
-  options.offsets = true;
-  options.integrating = true;
-  options.process_noise = 0.5;
-  const GapCase c = MakeGapCase(EffectKind::kBacklash, rng, options);
+  const GapCase c = ProcessNoiseBenchCase(2005, 7, EffectKind::kBacklash);
   const GapReport report = DiagnoseAndPrint(c, "backlash on an integrator under process noise");
   const GapVerdict& v = report.verdict;
   EXPECT_EQ(NamedSorted(v), std::vector<std::string>{"backlash"});
