@@ -1132,21 +1132,22 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
       std::sort(k.begin(), k.end());
       return k;
     };
-    const std::string pair =
-        std::string(EffectName(v.effects[0].kind)) + " with " + EffectName(v.effects[1].kind);
+    const auto names = [](const GapVerdict& verdict) {  // "a with b"; the verdict's word where it names none
+      std::string s;
+      for (const Effect& e : verdict.effects) s += std::string(s.empty() ? "" : " with ") + EffectName(e.kind);
+      return s.empty() ? verdict.effect : s;
+    };
+    const std::string pair = names(v);
     const std::string segments = "segments of " + std::to_string(longer.fixed_segment) + " samples";
     if (kinds(check.verdict) == kinds(v)) {
       report.notes.push_back("the pair " + pair + ", searched at the floor, is found again on " + segments);
       return report;
     }
-    std::string named;
-    for (const Effect& e : check.verdict.effects) named += std::string(named.empty() ? "" : " with ") + EffectName(e.kind);
     GapOptions without = opts;
     without.second_effect_at_floor = false;
     GapReport seeded = seed;
     seeded.notes.push_back("the pair " + pair + ", searched though " + EffectName(v.effects[0].kind) +
-                           " reached the floor, is not found again on " + segments + " (they name " +
-                           (named.empty() ? check.verdict.effect : named) +
+                           " reached the floor, is not found again on " + segments + " (they name " + names(check.verdict) +
                            "), so it is dropped: a walk within the segments can pass for an effect");
     return DiagnoseGapOnce(sim_model, est, val, without, seeded);
   };
