@@ -226,9 +226,6 @@ struct GapReport {
   GapWhere where;
   std::vector<std::string> notes;     // what was assumed (e.g. "split in time at 50 %")
   int estimation_samples = 0, validation_samples = 0;
-  // The verdict's second effect was searched though its first reached the noise floor
-  // (GapOptions::second_effect_at_floor), and awaits its confirmation on longer segments.
-  bool second_at_floor = false;
   // The verdict's simulation of the validation records (their scored samples, stacked): the
   // fitted candidate, pair or higher-order part the verdict names (a quantiser named from the
   // lattice alone, with nothing fitted, leaves it at what was fitted before).

@@ -426,9 +426,13 @@ constexpr double kStepGainRequired = 0.8;      // the steps' diagnosis must end 
 constexpr long kShortestSegmentPerOrder = 50;   // a halved shooting segment keeps ≥ 50·(n + 1) samples
 
 // The diagnosis on records whose glitches are bridged already (`report` carries what the
-// bridging said).
+// bridging said). `second_at_floor`, where given, says whether the verdict's second effect was
+// searched though its first reached the noise floor (GapOptions::second_effect_at_floor), so
+// that it awaits its confirmation on longer segments (DiagnoseGap).
 GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapRecord> estimation_in,
-                          std::vector<GapRecord> validation_in, const GapOptions& options, GapReport report) {
+                          std::vector<GapRecord> validation_in, const GapOptions& options, GapReport report,
+                          bool* second_at_floor = nullptr) {
+  if (second_at_floor) *second_at_floor = false;
   if (estimation_in.empty()) Fail("no estimation records");
   const double ts = estimation_in.front().sample_time;
   if (!(ts > 0)) Fail("the records' sample time must be positive");
@@ -936,7 +940,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
       }
       verdict_val_mse = c.validation_mse;
       report.validation_prediction = best.pair.y_val;
-      report.second_at_floor = at_floor_only;
+      if (second_at_floor) *second_at_floor = at_floor_only;
       if (tie) {
         report.notes.push_back("the tie between " + v.tied[0] + " and " + v.tied[1] + " is settled by the pair " +
                                EffectName(c.effects[0].kind) + " with " + EffectName(c.effects[1].kind));
@@ -1119,8 +1123,9 @@ GapReport DiagnoseGap(const TransferFunction& sim_model, const std::vector<GapRe
   // without that search, and the first effect stands alone.
   const auto diagnose_once = [&](const std::vector<GapRecord>& est, const std::vector<GapRecord>& val,
                                  const GapOptions& opts, const GapReport& seed) {
-    GapReport report = DiagnoseGapOnce(sim_model, est, val, opts, seed);
-    if (!report.second_at_floor || opts.fixed_segment >= 0 || report.verdict.effects.size() < 2) return report;
+    bool at_floor = false;
+    GapReport report = DiagnoseGapOnce(sim_model, est, val, opts, seed, &at_floor);
+    if (!at_floor || opts.fixed_segment >= 0 || report.verdict.effects.size() < 2) return report;
     const GapVerdict& v = report.verdict;
     GapOptions longer = opts;
     longer.fixed_segment = 2 * v.shooting_segment;
