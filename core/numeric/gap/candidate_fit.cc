@@ -829,6 +829,17 @@ Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord
     } else if (!own.empty()) {
       tried.push_back(std::accumulate(own.begin(), own.end(), 0.0) / own.size());
     }
+    // Behind |y| the output never reads below b (|·| ≥ 0), and a segment that keeps to one side
+    // of the fold takes any b under its own by moving its level away from the fold: the lowest
+    // own b suits every such segment. The median and the mean above can lie above a segment's
+    // readings, where no level fits it: a plant below the fold for the whole record (an actuator
+    // offset driving an integrator down, `gap bench --cases 39 --seed 7303 --integrating
+    // --offsets --excitation steps`, case 37), whose segments grazing the fold (by 0.008 on an
+    // output of 8) counted as folding with own b up to 3.7 where the sensor offset was −1.63.
+    if (fold && !own.empty()) {
+      const double lowest = *std::min_element(own.begin(), own.end());
+      if (std::find(tried.begin(), tried.end(), lowest) == tried.end()) tried.push_back(lowest);
+    }
     if (tried.empty()) tried.push_back(0.0);
     double best_sse = INFINITY;
     for (double b : tried) {

@@ -371,6 +371,34 @@ TEST(GapIntegratingTest, AnAbsoluteValueSensorKeepsItsFoldUnderMultipleShooting)
   EXPECT_EQ(report.verdict.effects.size(), 1u);
 }
 
+
+TEST(GapIntegratingTest, AnAbsoluteValueSensorOnAPlantThatStaysBelowTheFoldIsTheMirroredPlant) {
+  // `idrig gap bench --cases 39 --seed 7303 --integrating --offsets --excitation steps`, case 37:
+  // the actuator offset drives the integrator below zero for both records, so the |y| sensor
+  // reads −y throughout (a refit keeps G0's sign and cannot). Every shooting segment keeps to
+  // one side of the fold, where b and the level are one direction; the segments grazing the
+  // fold counted as folding, and the record's b was tried at their median and best own b (up to
+  // 3.7, above the readings of the others), where no level fits: the |y| fit left 2.08, 30 times
+  // the noise, and the verdict was unmodelled_resonance + time_delay.
+  const GapCase c = OffsetBenchCase(7303, 37, {EffectKind::kSensorNonlinearity}, true, "steps");
+  ASSERT_NE(c.effect.params.at(3), 0.0);  // the |y| variant
+  // The readings |y| + b sit above the sensor offset, and the plant's output is below the fold:
+  // the readings rise while the actuator offset drives the integrator down.
+  ASSERT_LT(c.input_offset, 0.0);
+  ASSERT_GT(c.estimation.y.minCoeff(), c.output_offset);
+  ASSERT_GT(c.estimation.y.tail(100).mean(), c.estimation.y.head(100).mean() + 1.0);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const GapVerdict& v = report.verdict;
+  std::printf("|y| sensor below its fold: verdict %s (%zu effects), NRMSE %.4f -> %.4f (noise %.4f), du %.4f (true %.4f)\n",
+              v.effect.c_str(), v.effects.size(), v.nrmse_before, v.nrmse_after, v.noise_nrmse,
+              v.nuisance.input_offset, c.input_offset);
+  ASSERT_EQ(v.effect, "sensor_nonlinearity");
+  EXPECT_EQ(v.effects.size(), 1u);
+  ASSERT_EQ(v.params.params.size(), 4u);
+  EXPECT_EQ(v.params.params[3], 1.0);  // |y|, not the polynomial
+  EXPECT_LT(v.nrmse_after, 1.05 * v.noise_nrmse);
+  EXPECT_NEAR(v.nuisance.input_offset, c.input_offset, 0.05 * std::abs(c.input_offset));
+}
 TEST(GapIntegratingTest, ABacklashIsFittedFromWhereItsPlayWasBeforeTheRecord) {
   // `idrig gap bench --cases 54 --seed 980 --combos 1 --pairs any --integrating --offsets
   // --excitation levels`, case 4, with the backlash alone: the bench's rig warmed up at zero
