@@ -267,12 +267,32 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
 }
 
 bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWork& single, std::string& note,
-                   bool* main_second) {
+                   bool* main_second, const CandidateWork* quantiser_alone) {
   const GapOptions& options = *ctx.options;
   *main_second = false;
   if (pair.fit.effects.size() != 2 || pair.spec.kinds.size() != 2) return false;
-  for (EffectKind k : pair.spec.kinds)
-    if (k == EffectKind::kOutputQuantization) return false;
+  if (pair.spec.kinds[1] == EffectKind::kOutputQuantization) {
+    // Reached from the other effect, with the quantiser as its second: the other effect must
+    // also pass as a second after the quantiser alone (its single fit, placed from the lattice),
+    // by the forward search's rules, or the route through it lets it past them. `gap bench
+    // --cases 39 --seed 7307 --integrating --offsets --excitation noise`, case 25: a quantiser of
+    // step 0.17 at a noise σ of 0.02 (lattice strength 1.0); from the quantiser no second passed
+    // (a cubic spring: LR 8.2 against 11.4), from the cubic spring (LR 18.1 alone against G0) the
+    // quantiser passed at LR 1270, and the pair was named.
+    if (!quantiser_alone || !quantiser_alone->fit.eligible) return false;
+    const SecondEffectTest test = TestSecondEffect(ctx, *quantiser_alone, pair);
+    if (test.Passes(options) && pair.fit.bic < quantiser_alone->fit.bic - options.ambiguity_bic) return false;
+    single = *quantiser_alone;
+    char line[400];
+    std::snprintf(line, sizeof line,
+                  "backward check of the pair: %s does not pass as a second effect after output_quantization alone "
+                  "(LR %.1f, threshold %.1f; signature %.2f, gain z %.1f; ΔBIC %.1f); the pair is dropped",
+                  EffectName(pair.spec.kinds[0]), test.lr, test.threshold, test.signature, test.gain_z,
+                  pair.fit.bic - quantiser_alone->fit.bic);
+    note = line;
+    return true;
+  }
+  if (pair.spec.kinds[0] == EffectKind::kOutputQuantization) return false;  // the forward search's rules applied
   const Candidate both(*ctx.g0, pair.spec, ctx.scales, options.substeps);
   if (both.Size() != pair.x.size()) return false;
   std::vector<CandidateWork> alone(2);

@@ -387,8 +387,10 @@ struct PairSearch {
 // margin) against the main one alone as refitted from the pair; if it does not, the pair is
 // dropped for the main effect alone (a route through the lesser effect must not let it past
 // the rules). Otherwise `main_second` is set: report the pair with the main effect first.
+// A pair reached from its other effect with the quantiser second: that effect must pass as a
+// second after `quantiser_alone` (the quantiser's single fit; none: the pair stands).
 bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWork& single, std::string& note,
-                   bool* main_second);
+                   bool* main_second, const CandidateWork* quantiser_alone);
 // Grid starts of the piecewise effects (limits, dead zone, backlash, friction), whose cost has
 // no gradient where no sample reaches the break: a coarse grid over the tails of u or y (both
 // limits, or one), or over widths; physical units. Empty for the other effects.

@@ -399,6 +399,24 @@ TEST(GapIntegratingTest, AnAbsoluteValueSensorOnAPlantThatStaysBelowTheFoldIsThe
   EXPECT_LT(v.nrmse_after, 1.05 * v.noise_nrmse);
   EXPECT_NEAR(v.nuisance.input_offset, c.input_offset, 0.05 * std::abs(c.input_offset));
 }
+TEST(GapIntegratingTest, AnEffectThatReachesAQuantiserMustPassAsASecondEffectAfterIt) {
+  // `idrig gap bench --cases 39 --seed 7307 --integrating --offsets --excitation noise`, case 25:
+  // a quantiser of step 0.17 at a noise σ of 0.02. From the quantiser no second effect passes; a
+  // cubic spring alone is eligible against G0, and from it the quantiser passes as its second
+  // (LR about 1270): the pair cubic spring + quantiser was named. The backward check now asks the
+  // spring to pass as a second after the quantiser alone, as the search from the quantiser did.
+  const GapCase c = OffsetBenchCase(7307, 25, {EffectKind::kOutputQuantization}, true, "noise");
+  const GapReport report = DiagnoseOnOneThread(c);
+  const GapVerdict& v = report.verdict;
+  const std::string dropped = LastNoteWith(report, "does not pass as a second effect after output_quantization alone");
+  std::printf("quantiser reached from a cubic spring: verdict %s (%zu effects); %s\n", v.effect.c_str(),
+              v.effects.size(), dropped.c_str());
+  EXPECT_TRUE(Ranked(report, EffectKind::kCubicStiffness).eligible);  // the route through the spring exists
+  EXPECT_EQ(v.effect, "output_quantization");
+  EXPECT_EQ(v.effects.size(), 1u);
+  EXPECT_NE(dropped.find("cubic_stiffness"), std::string::npos);
+}
+
 TEST(GapIntegratingTest, ABacklashIsFittedFromWhereItsPlayWasBeforeTheRecord) {
   // `idrig gap bench --cases 54 --seed 980 --combos 1 --pairs any --integrating --offsets
   // --excitation levels`, case 4, with the backlash alone: the bench's rig warmed up at zero
