@@ -372,24 +372,19 @@ TEST(GapIntegratingTest, AnAbsoluteValueSensorKeepsItsFoldUnderMultipleShooting)
 }
 
 
-TEST(GapIntegratingTest, AnAbsoluteValueSensorOnAPlantThatStaysBelowTheFoldIsTheMirroredPlant) {
-  // `idrig gap bench --cases 39 --seed 7303 --integrating --offsets --excitation steps`, case 37:
-  // the actuator offset drives the integrator below zero for both records, so the |y| sensor
-  // reads −y throughout (a refit keeps G0's sign and cannot). Every shooting segment keeps to
-  // one side of the fold, where b and the level are one direction; the segments grazing the
-  // fold counted as folding, and the record's b was tried at their median and best own b (up to
-  // 3.7, above the readings of the others), where no level fits: the |y| fit left 2.08, 30 times
-  // the noise, and the verdict was unmodelled_resonance + time_delay.
-  const GapCase c = OffsetBenchCase(7303, 37, {EffectKind::kSensorNonlinearity}, true, "steps");
+// An |y| sensor on an integrator that an actuator offset drives below zero for both records:
+// the sensor reads −y throughout (a refit keeps G0's sign and cannot), and the diagnosis must find
+// |y| at the noise floor with the actuator offset that drives the plant down.
+void ExpectTheMirroredPlant(const GapCase& c, const char* what) {
   ASSERT_NE(c.effect.params.at(3), 0.0);  // the |y| variant
-  // The readings |y| + b sit above the sensor offset, and the plant's output is below the fold:
-  // the readings rise while the actuator offset drives the integrator down.
+  // The readings |y| + b sit above the sensor offset and rise while the actuator offset drives
+  // the integrator down.
   ASSERT_LT(c.input_offset, 0.0);
   ASSERT_GT(c.estimation.y.minCoeff(), c.output_offset);
   ASSERT_GT(c.estimation.y.tail(100).mean(), c.estimation.y.head(100).mean() + 1.0);
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
-  std::printf("|y| sensor below its fold: verdict %s (%zu effects), NRMSE %.4f -> %.4f (noise %.4f), du %.4f (true %.4f)\n",
+  std::printf("%s: verdict %s (%zu effects), NRMSE %.4f -> %.4f (noise %.4f), du %.4f (true %.4f)\n", what,
               v.effect.c_str(), v.effects.size(), v.nrmse_before, v.nrmse_after, v.noise_nrmse,
               v.nuisance.input_offset, c.input_offset);
   ASSERT_EQ(v.effect, "sensor_nonlinearity");
@@ -399,6 +394,28 @@ TEST(GapIntegratingTest, AnAbsoluteValueSensorOnAPlantThatStaysBelowTheFoldIsThe
   EXPECT_LT(v.nrmse_after, 1.05 * v.noise_nrmse);
   EXPECT_NEAR(v.nuisance.input_offset, c.input_offset, 0.05 * std::abs(c.input_offset));
 }
+
+TEST(GapIntegratingTest, AnAbsoluteValueSensorOnAPlantThatStaysBelowTheFoldIsTheMirroredPlant) {
+  // `idrig gap bench --cases 39 --seed 7303 --integrating --offsets --excitation steps`, case 37.
+  // Every shooting segment keeps to one side of the fold, where b and the level are one
+  // direction; the segments grazing the fold counted as folding, and the record's b was tried at
+  // their median and best own b (up to 3.7, above the readings of the others), where no level
+  // fits: the |y| fit left 2.08, 30 times the noise, and the verdict was unmodelled_resonance +
+  // time_delay. The lowest own b is now tried too.
+  ExpectTheMirroredPlant(OffsetBenchCase(7303, 37, {EffectKind::kSensorNonlinearity}, true, "steps"),
+                         "|y| sensor below its fold, steps");
+}
+
+TEST(GapIntegratingTest, AnAbsoluteValueSensorBelowTheFoldStartsFromTheMirroredDrift) {
+  // `idrig gap bench --cases 260 --seed 7310 --integrating --offsets --only sensor_nonlinearity`,
+  // case 219: an actuator offset of −0.78 drives the integrator from −3 to −55. From the refit's
+  // du and from none the |y| fit ran to du = −2.69, its bound, and stayed where the refit was
+  // (0.367 for a noise variance of 0.215); the verdict was unmodelled_resonance + time_delay. The
+  // du that fits G0 to −y is now a start of the |y| fit.
+  ExpectTheMirroredPlant(OffsetBenchCase(7310, 219, {EffectKind::kSensorNonlinearity}, true),
+                         "|y| sensor below its fold, drift from the mirrored records");
+}
+
 TEST(GapIntegratingTest, AnEffectThatReachesAQuantiserMustPassAsASecondEffectAfterIt) {
   // `idrig gap bench --cases 39 --seed 7307 --integrating --offsets --excitation noise`, case 25:
   // a quantiser of step 0.17 at a noise σ of 0.02. From the quantiser no second effect passes; a
