@@ -1238,20 +1238,6 @@ double VariantCriterion(const FitContext& ctx, const CandidateWork& trial, size_
   return ctx.n_est * std::log(trial.fit.estimation_mse) + trial.fit.parameters * std::log(double(ctx.n_est));
 }
 
-// The du (x's coordinate) that fits G0 as given, with the nuisance, to the estimation records
-// with their output mirrored (y → −y): the actuator offset that drives an integrating plant the
-// way the mirrored readings drift.
-double MirroredDriftOffset(const FitContext& ctx) {
-  CandidateSpec spec = SpecFor(ctx, {EffectKind::kNone});
-  spec.fit_plant = false;
-  const Candidate as_is(*ctx.g0, spec, ctx.scales, ctx.options->substeps);
-  if (as_is.Size() != 1) return 0.0;  // du alone (an integrating plant)
-  std::vector<GapRecord> mirrored = *ctx.estimation;
-  for (GapRecord& r : mirrored) r.y = -r.y;
-  const Residuals residuals{&as_is, &mirrored, ctx.n_est};
-  return Minimise(residuals, Eigen::VectorXd::Zero(1), ctx.options->evaluations_polish * 2).x(0);
-}
-
 void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w) {
   const std::vector<GapRecord>& estimation = *ctx.estimation;
   (void)estimation;
@@ -1285,14 +1271,14 @@ void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w) {
       prefixes.push_back(g0_du);
       // Behind |y| a plant whose output stays below the fold is read mirrored (|y| = −y): the
       // readings drift the other way from the plant, and the du that drives the plant is the one
-      // that fits G0 to −y, which neither the refit nor G0 reaches (a refit keeps the sign of G0's
-      // gain). `gap bench --cases 260 --seed 7310 --integrating --offsets --only
+      // that fits G0 to −y (ctx.mirrored_du, fitted beside G0 itself), which neither the refit
+      // nor G0 reaches (a refit keeps the sign of G0's gain). `gap bench --cases 260 --seed 7310 --integrating --offsets --only
       // sensor_nonlinearity`, case 219: an actuator offset of −0.78 drove the integrator from
       // −3 to −55; from the refit's du the |y| fit ran to du = −2.69, its bound, and left the
       // estimation records where the refit did (0.367 for a noise variance of 0.215).
       if (kind == EffectKind::kSensorNonlinearity && !fixed.empty()) {
         Eigen::VectorXd mirrored = from_g0;
-        mirrored(ctx.refit_size - 1) = MirroredDriftOffset(ctx);
+        mirrored(ctx.refit_size - 1) = ctx.mirrored_du;
         prefixes.push_back(mirrored);
       }
     }

@@ -282,6 +282,7 @@ struct FitContext {
   long n_est = 0, n_val = 0;
   Eigen::VectorXd y_val, y0_val, y_refit_val;  // measured, G0, refitted G0 on validation
   double as_is_mse = 0;                         // G0 (with nuisance) on estimation
+  double mirrored_du = 0;                       // G0's du (x's coordinate) on the estimation records with y → −y
   FitOutcome refit_fit;                         // refitted G0 (parameter_mismatch)
   CandidateSpec nuisance;                       // the nuisance setting every candidate shares
   bool integrating = false;                     // G0 integrates: du in every candidate

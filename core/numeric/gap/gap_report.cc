@@ -550,6 +550,17 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
       Minimise(as_is_residuals, Eigen::VectorXd::Zero(as_is.Size()), options.evaluations_polish * (as_is.Size() + 1));
   const Eigen::VectorXd y0_val =
       Stack(validation, [&](const GapRecord& r) { return as_is.Predict(as_is_fit.x, r); });
+  // The same G0 fitted to the estimation records with their output mirrored (y → −y), on an
+  // integrating plant (du alone): the actuator offset that drives the plant the way the mirrored
+  // readings drift, where an |y| sensor reads a plant that stays below its fold (FitEffect).
+  double mirrored_du = 0;
+  if (ctx.integrating && as_is.Size() == 1 &&
+      std::find(kinds.begin(), kinds.end(), EffectKind::kSensorNonlinearity) != kinds.end()) {
+    std::vector<GapRecord> mirrored = estimation;
+    for (GapRecord& r : mirrored) r.y = -r.y;
+    const Residuals mirrored_residuals{&as_is, &mirrored, n_est};
+    mirrored_du = Minimise(mirrored_residuals, Eigen::VectorXd::Zero(1), options.evaluations_polish * 2).x(0);
+  }
   const Candidate refit(g0, SpecFor(ctx, {EffectKind::kParameterMismatch}), scales, options.substeps);
   const Residuals refit_residuals{&refit, &estimation, n_est};
   Eigen::VectorXd refit_start = Eigen::VectorXd::Zero(refit.Size());
@@ -595,6 +606,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
   ctx.y0_val = y0_val;
   ctx.y_refit_val = y_refit_val;
   ctx.as_is_mse = as_is_fit.mse;
+  ctx.mirrored_du = mirrored_du;
   ctx.as_is_size = as_is.Size();
   ctx.refit_fit = refit_fit;
   ctx.refit_size = refit.Size();
