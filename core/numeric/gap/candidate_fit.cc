@@ -183,13 +183,17 @@ Eigen::VectorXd SettledDirection(const StateSpace& d, bool with_line) {
 // The sensor's own columns on a segment [start, start + len) of a record: a drift's ramp
 // (k − (len − 1)/2)·Ts, centred so that the offset b stays the segment's mean level (with
 // `drift`), then for every sensor step inside the segment the level it adds (0 before, 1 from it).
-Eigen::MatrixXd SensorColumns(const GapRecord& record, long start, long len, bool drift) {
+// `from_record_start`: the ramp (start + k)·Ts, zero where the record starts — for clips, whose
+// limits are in the measured output's coordinates (OffsetAndStateThroughMaps, `offset_inside`).
+Eigen::MatrixXd SensorColumns(const GapRecord& record, long start, long len, bool drift,
+                              bool from_record_start = false) {
   std::vector<long> steps;
   for (long s : record.sensor_steps)
     if (s > start && s < start + len) steps.push_back(s - start);
   Eigen::MatrixXd x = Eigen::MatrixXd::Zero(len, (drift ? 1 : 0) + static_cast<long>(steps.size()));
+  const double anchor = from_record_start ? -static_cast<double>(start) : 0.5 * (len - 1);
   if (drift)
-    for (long k = 0; k < len; ++k) x(k, 0) = (k - 0.5 * (len - 1)) * record.sample_time;
+    for (long k = 0; k < len; ++k) x(k, 0) = (k - anchor) * record.sample_time;
   for (size_t i = 0; i < steps.size(); ++i) x.col((drift ? 1 : 0) + static_cast<long>(i)).tail(len - steps[i]).setOnes();
   return x;
 }
@@ -867,8 +871,16 @@ Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord
     // segment (or a record scored from later on) has the record's own input in the line.
     const Eigen::MatrixXd& state = start == 0 ? first : free;
     // The sensor's own columns beside the offset (after the output maps, where the sensor is): a
-    // drift's ramp, the level each sensor step adds.
-    const Eigen::MatrixXd sensor = SensorColumns(record, start, len, spec_.drift);
+    // drift's ramp, the level each sensor step adds. Behind clips, whose limits are in the
+    // measured output's coordinates and whose offset is inside them, the ramp starts at zero with
+    // the record: a drift after the clip moves the clipped readings, and centred on each record
+    // (or each shooting segment) it would put the limits where that record's (segment's) mean
+    // drift puts them — the estimation record's drifting up, the validation record's down (`gap
+    // bench --cases 39 --seed 7403 --offsets --add-drift 3 --excitation noise`, the
+    // output_saturation cases 10, 23 and 36: the clip alone left 2× the noise variance on
+    // validation, and a sensor map beside it, with its offset after the clip, was named).
+    const bool anchored = !maps.empty() && offset_inside;
+    const Eigen::MatrixXd sensor = SensorColumns(record, start, len, spec_.drift, anchored);
     const long n = state.cols(), m = sensor.cols();
     Eigen::VectorXd coef;
     if (!maps.empty()) {  // the state inside the maps, the offset (and the sensor's columns) after them
@@ -898,7 +910,7 @@ Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord
       nuisance->output_level.resize(record.y.size());
       for (long k = 0; k < record.y.size(); ++k) {
         nuisance->output_level(k) =
-            coef(0) + nuisance->output_drift * (k - start - 0.5 * (len - 1)) * record.sample_time;
+            coef(0) + nuisance->output_drift * (anchored ? k : k - start - 0.5 * (len - 1)) * record.sample_time;
         if (m > (spec_.drift ? 1 : 0) && k >= start) {  // the sensor steps' levels, as of sample k
           const long row = std::min(k - start, len - 1);
           for (long i = spec_.drift ? 1 : 0; i < m; ++i) nuisance->output_level(k) += sensor(row, i) * coef(1 + n + i);

@@ -1510,6 +1510,30 @@ INSTANTIATE_TEST_SUITE_P(Rigs, GapDriftTest,
                            return std::string(EffectName(info.param.truth)) + "_" + std::to_string(info.param.seed);
                          });
 
+// An output clip read through a drifting sensor with offsets (`idrig gap bench --cases 39 --seed
+// 7403 --offsets --add-drift 3 --excitation noise`, case 10): the drift (after the clip) rises
+// over the estimation record and falls over the validation record, so the clipped readings sit
+// 3 noise sigmas apart on the two records. With the drift's ramp centred on each record the
+// limits (in the measured output's coordinates, the offset inside the clip) fitted the
+// estimation record and missed the validation one: the clip alone left twice the noise variance
+// there, and a sensor map beside it (its offset after the clip) was named. The ramp behind clips
+// now starts at zero with the record.
+TEST(GapClipDriftTest, AClipReadThroughADriftingSensorIsTheClipAlone) {
+  std::mt19937_64 rng(BenchCaseSeed(7403, 10));
+  GapCaseOptions options;
+  options.offsets = true;
+  options.drift = 3;
+  options.excitation = "noise";
+  const GapCase c = MakeGapCase(EffectKind::kOutputSaturation, rng, options);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const GapVerdict& v = report.verdict;
+  std::printf("clip behind a drifting sensor: verdict %s (%zu effects), NRMSE %.4f -> %.4f floor %.4f\n",
+              v.effect.c_str(), v.effects.size(), v.nrmse_before, v.nrmse_after, v.noise_nrmse);
+  EXPECT_EQ(v.effect, "output_saturation");
+  EXPECT_EQ(v.effects.size(), 1u);
+  EXPECT_LT(v.nrmse_after, 1.1 * v.noise_nrmse);
+}
+
 // A sensor re-zeroed part way through both records (8 noise sigmas at sample 1500 of the
 // estimation record, −8 at 2500 of the validation record). Against G0 a friction case's step is
 // smaller than what the missing friction leaves; the diagnosed model's residual shows it, and
