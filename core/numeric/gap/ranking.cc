@@ -291,6 +291,53 @@ void MaskLinearEffectsAtTheirIdentity(const FitContext& ctx, std::vector<Candida
   }
 }
 
+void MaskWhatTheEstimationRecordsReject(const FitContext& ctx, std::vector<CandidateWork>& work) {
+  const GapOptions& options = *ctx.options;
+  auto eligible = [&](const CandidateWork& w) {
+    const EffectKind kind = w.fit.effect.kind;
+    if (kind == EffectKind::kNone) return true;
+    if (kind == EffectKind::kParameterMismatch) return w.fit.significant && !w.masked;
+    return EffectEligible(options, w);
+  };
+  CandidateWork *a = nullptr, *b = nullptr;  // the best two eligible singles by validation BIC
+  for (CandidateWork& w : work) {
+    if (w.fit.effects.size() > 1 || !eligible(w)) continue;
+    if (!a || w.fit.bic < a->fit.bic) b = a, a = &w;
+    else if (!b || w.fit.bic < b->fit.bic) b = &w;
+  }
+  if (!a || !b || a->fit.effect.kind == EffectKind::kNone || b->fit.effect.kind == EffectKind::kNone ||
+      !(b->fit.estimation_mse < a->fit.estimation_mse))
+    return;
+  const Candidate ca(*ctx.g0, a->spec, ctx.scales, options.substeps), cb(*ctx.g0, b->spec, ctx.scales, options.substeps);
+  if (ca.Size() != a->x.size() || cb.Size() != b->x.size()) return;
+  const std::vector<GapRecord>& estimation = *ctx.estimation;
+  const Eigen::VectorXd y = Stack(estimation, [](const GapRecord& r) { return r.y; });
+  const Eigen::VectorXd ya = Stack(estimation, [&](const GapRecord& r) { return ca.Predict(a->x, r); });
+  const Eigen::VectorXd yb = Stack(estimation, [&](const GapRecord& r) { return cb.Predict(b->x, r); });
+  if (!ya.allFinite() || !yb.allFinite()) return;
+  // b's gain on the records it was fitted to, less what its extra parameters and nuisance
+  // columns take up there for free; a's gain on validation, less its extra nuisance columns.
+  const long extra_est = std::max<long>(0, (b->fit.parameters + b->fit.nuisance_estimation) -
+                                               (a->fit.parameters + a->fit.nuisance_estimation));
+  const double z_est = ValidationGainZ(
+      y, ya, yb, NuisanceGainBias(extra_est, b->fit.estimation_mse, ctx.n_est, b->fit.nuisance_estimation), true);
+  const long extra_val = std::max<long>(0, a->fit.nuisance_validation - b->fit.nuisance_validation);
+  const double z_val = ValidationGainZ(
+      ctx.y_val, b->y_val, a->y_val,
+      NuisanceGainBias(extra_val, a->fit.validation_mse, ctx.n_val, a->fit.nuisance_validation), true);
+  const double threshold = NormalUpperQuantile(options.significance);
+  if (!(z_est > threshold) || z_val > threshold) return;
+  a->masked = true;
+  char line[420];
+  std::snprintf(line, sizeof line,
+                "set aside: %s fits the estimation records significantly better (MSE %.4g against %.4g, z = %.2f) and "
+                "this fit's validation gain over it is not significant (z = %.2f; both with the automatic "
+                "Newey–West lag, threshold %.2f): the validation records cannot tell the two apart, the "
+                "estimation records can",
+                EffectName(b->fit.effect.kind), b->fit.estimation_mse, a->fit.estimation_mse, z_est, z_val, threshold);
+  a->fit.note = line;
+}
+
 bool PassesEffectRule(const GapOptions& options, bool significant, double signature, bool gain_significant) {
   return significant && (signature >= options.min_signature || gain_significant);
 }
