@@ -759,6 +759,11 @@ Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord
   // their rates then held for every segment, or no drift where that leaves less (a load
   // disturbance's walk before the clip, on a rig whose sensor does not drift, also tilts the
   // segments' own ramps: `--seed 2005 --integrating --process-noise 0.5 --offsets`, case 10).
+  // The held rate moves the limits only, clip(s − r·t) + r·t = clip(s, lo + r·t, hi + r·t): where
+  // the clip is not reached the segment's own offset takes the drift, as for every candidate
+  // without a clip (a ramp on those samples too would credit the clip with the drift, and a
+  // clip beside a cubic spring passed as a second effect on it: `--cases 26 --seed 7406
+  // --integrating --offsets --add-drift 3`, case 22).
   const bool clip_drift = spec_.clip_drift && !maps.empty() && offset_inside && segments.size() > 1;
   double clip_rate = 0.0;
   std::vector<Eigen::VectorXd> clip_coefs;
@@ -786,7 +791,8 @@ Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord
         const Eigen::VectorXd ramp =
             Eigen::VectorXd::LinSpaced(len, double(start), double(start + len - 1)) * record.sample_time;
         Eigen::VectorXd fitted;
-        coefs.push_back(OffsetAndStateThroughMaps(record.y.segment(start, len) - rate * ramp, y.segment(start, len),
+        coefs.push_back(OffsetAndStateThroughMaps(record.y.segment(start, len) - rate * ramp,
+                                                  y.segment(start, len) - rate * ramp,
                                                   start == 0 ? first : free, maps, &fitted, true,
                                                   SensorColumns(record, start, len, spec_.drift, true),
                                                   start == 0 ? settled : Eigen::VectorXd()));
