@@ -749,60 +749,6 @@ Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord
   // ~1.9 s of the 12.7 s of `gap_benchmark --benchmark_filter=BM_DiagnosePair/1/10000/1` and
   // changed no verdict of the benches that motivated the sharing (docs/gap.md, stop 42).
   const bool share_offset = !maps.empty() && !offset_inside && segments.size() > 1;
-  // Clips alone on shooting segments: a sensor drift after the clip moves the clipped readings
-  // from segment to segment, which each segment's offset (inside the clip) cannot follow; the
-  // limits, global, would sit where the record's mean drift puts them and miss the segments at
-  // either end (`gap bench --cases 8 --seed 7404 --integrating --offsets --add-drift 3 --only
-  // output_saturation`: 2 of 8 named, every one of them without the drift). One rate per record:
-  // each segment fitted first with a ramp of its own from the record's start (its constant part
-  // is the clip's shift there; its slope is the drift's wherever the segment is), the median of
-  // their rates then held for every segment, or no drift where that leaves less (a load
-  // disturbance's walk before the clip, on a rig whose sensor does not drift, also tilts the
-  // segments' own ramps: `--seed 2005 --integrating --process-noise 0.5 --offsets`, case 10).
-  // The held rate moves the limits only, clip(s − r·t) + r·t = clip(s, lo + r·t, hi + r·t): where
-  // the clip is not reached the segment's own offset takes the drift, as for every candidate
-  // without a clip (a ramp on those samples too would credit the clip with the drift, and a
-  // clip beside a cubic spring passed as a second effect on it: `--cases 26 --seed 7406
-  // --integrating --offsets --add-drift 3`, case 22).
-  const bool clip_drift = spec_.clip_drift && !maps.empty() && offset_inside && segments.size() > 1;
-  double clip_rate = 0.0;
-  std::vector<Eigen::VectorXd> clip_coefs;
-  Eigen::VectorXd clip_fitted;
-  if (clip_drift) {
-    std::vector<double> rates;
-    for (const auto& [start, len] : segments) {
-      const Eigen::MatrixXd& state = start == 0 ? first : free;
-      const Eigen::VectorXd coef =
-          OffsetAndStateThroughMaps(record.y.segment(start, len), y.segment(start, len), state, maps, nullptr, true,
-                                    SensorColumns(record, start, len, true, true), Eigen::VectorXd());
-      if (coef.size() > 1 + state.cols() && std::isfinite(coef(1 + state.cols()))) rates.push_back(coef(1 + state.cols()));
-    }
-    std::vector<double> tried = {0.0};
-    if (!rates.empty()) {
-      std::nth_element(rates.begin(), rates.begin() + rates.size() / 2, rates.end());
-      if (rates[rates.size() / 2] != 0.0) tried.push_back(rates[rates.size() / 2]);
-    }
-    double best_sse = INFINITY;
-    for (double rate : tried) {
-      std::vector<Eigen::VectorXd> coefs;
-      Eigen::VectorXd fitted_all = y;
-      double sse = 0.0;
-      for (const auto& [start, len] : segments) {
-        const Eigen::VectorXd ramp =
-            Eigen::VectorXd::LinSpaced(len, double(start), double(start + len - 1)) * record.sample_time;
-        Eigen::VectorXd fitted;
-        coefs.push_back(OffsetAndStateThroughMaps(record.y.segment(start, len) - rate * ramp,
-                                                  y.segment(start, len) - rate * ramp,
-                                                  start == 0 ? first : free, maps, &fitted, true,
-                                                  SensorColumns(record, start, len, spec_.drift, true),
-                                                  start == 0 ? settled : Eigen::VectorXd()));
-        fitted += rate * ramp;
-        fitted_all.segment(start, len) = fitted;
-        sse += (record.y.segment(start, len) - fitted).squaredNorm();
-      }
-      if (sse < best_sse || clip_coefs.empty()) best_sse = sse, clip_rate = rate, clip_coefs.swap(coefs), clip_fitted.swap(fitted_all);
-    }
-  }
   std::vector<Eigen::VectorXd> shared_coefs;
   Eigen::VectorXd shared_fitted;
   if (share_offset) {
@@ -938,9 +884,9 @@ Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord
     const long n = state.cols(), m = sensor.cols();
     Eigen::VectorXd coef;
     if (!maps.empty()) {  // the state inside the maps, the offset (and the sensor's columns) after them
-      if (share_offset || clip_drift) {
-        coef = share_offset ? shared_coefs[j] : clip_coefs[j];
-        y.segment(start, len) = (share_offset ? shared_fitted : clip_fitted).segment(start, len);
+      if (share_offset) {
+        coef = shared_coefs[j];
+        y.segment(start, len) = shared_fitted.segment(start, len);
       } else {
         Eigen::VectorXd fitted;
         coef = OffsetAndStateThroughMaps(record.y.segment(start, len), y.segment(start, len), state, maps, &fitted,
@@ -959,13 +905,12 @@ Eigen::VectorXd Candidate::PredictFrom(const Eigen::VectorXd& x, const GapRecord
     }
     if (nuisance && j == 0) {
       nuisance->output_offset = coef(0);
-      nuisance->output_drift = spec_.drift ? coef(1 + n) : clip_drift ? clip_rate : 0.0;
+      nuisance->output_drift = spec_.drift ? coef(1 + n) : 0.0;
       nuisance->initial_state_rms = n > 0 ? coef.segment(1, n).norm() / std::sqrt(double(n)) : 0.0;
       nuisance->output_level.resize(record.y.size());
       for (long k = 0; k < record.y.size(); ++k) {
         nuisance->output_level(k) =
-            coef(0) + nuisance->output_drift * (anchored || clip_drift ? k : k - start - 0.5 * (len - 1)) *
-                          record.sample_time;
+            coef(0) + nuisance->output_drift * (anchored ? k : k - start - 0.5 * (len - 1)) * record.sample_time;
         if (m > (spec_.drift ? 1 : 0) && k >= start) {  // the sensor steps' levels, as of sample k
           const long row = std::min(k - start, len - 1);
           for (long i = spec_.drift ? 1 : 0; i < m; ++i) nuisance->output_level(k) += sensor(row, i) * coef(1 + n + i);
@@ -1011,7 +956,6 @@ long Candidate::NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapR
       columns += rank;
     }
     if (!PlayStates(x, record).empty()) ++columns;  // where the play was before the record
-    if (spec_.clip_drift && segments.size() > 1 && ClipsAlone()) ++columns;  // the record's drift behind the clips
   }
   return columns;
 }
@@ -1206,8 +1150,7 @@ void FitSpecFrom(const FitContext& ctx, const CandidateSpec& spec, const std::ve
   for (const GapRecord& r : *ctx.estimation) {
     cand.Predict(best.x, r, &nuisance);
     c.output_offsets.push_back(nuisance.output_offset);
-    if (spec.drift || (spec.clip_drift && spec.segment > 0 && cand.ClipsAlone()))
-      c.output_drifts.push_back(nuisance.output_drift);
+    if (spec.drift) c.output_drifts.push_back(nuisance.output_drift);
   }
   w.x = best.x;
   w.spec = spec;

@@ -52,10 +52,6 @@ struct CandidateSpec {
   // A sensor drift per record (segment), a ramp beside the output offset, by variable projection:
   // set where it is not an input offset in disguise (ChooseFitScheme).
   bool drift = false;
-  // On shooting segments (where `drift` is off: each segment's own offset takes a slow drift),
-  // behind output clips alone one drift rate per record, shared by its segments: their offset is
-  // inside the clip, which a drift after it moves (Candidate::PredictFrom).
-  bool clip_drift = false;
 };
 
 struct Nuisance {
@@ -130,12 +126,6 @@ class Candidate {
   // so a candidate with more states (a lag, a resonance, a higher order), above all under
   // multiple shooting, gets a lower validation MSE for free; the scores count them.
   long NuisanceColumns(const Eigen::VectorXd& x, const std::vector<GapRecord>& records) const;
-  // The output maps are clips alone (an output saturation, no sensor map): their offset is
-  // inside them (Predict).
-  bool ClipsAlone() const {
-    const auto has = [&](EffectKind k) { return std::find(spec_.kinds.begin(), spec_.kinds.end(), k) != spec_.kinds.end(); };
-    return has(EffectKind::kOutputSaturation) && !has(EffectKind::kSensorNonlinearity);
-  }
   // The plant with the linear effects (lag, resonance, delay) folded in: what the free
   // response of the nuisance comes from.
   TransferFunction LinearPart(const Eigen::VectorXd& x) const;
@@ -350,14 +340,16 @@ void MaskLinearEffectsAtTheirIdentity(const FitContext& ctx, std::vector<Candida
 // The validation BIC ranks the candidates; where the validation records cannot tell the best two
 // eligible single candidates apart and the estimation records can, the estimation records
 // decide. The best (not none) is masked, with a note, when the runner-up (not none) fits the
-// estimation records significantly better (ValidationGainZ on the estimation residuals with the
-// automatic Newey–West lag, less the free gain of its extra parameters and nuisance columns)
-// and its own validation gain over the runner-up is not significant. `gap bench --cases 26
+// estimation records within the noise floor (`floor_mse`: the independent floor's variance with
+// its sample tolerance on those records; 0 turns the rule off) and significantly better than
+// the best (ValidationGainZ on the estimation residuals with the automatic Newey–West lag, less
+// the free gain of its extra parameters and nuisance columns), and the best's own validation
+// gain over the runner-up is not significant. `gap bench --cases 26
 // --seed 7406 --integrating --offsets`, case 23: an output clip under a binary input, which
 // the validation record barely reaches, at the noise on both records (estimation MSE 0.00297
 // for a noise variance of 0.00303), lost by 0.7 % of validation MSE to an actuator lag of
 // T = 7.2 s that left 3.3 times the noise on the estimation record (ranking.cc).
-void MaskWhatTheEstimationRecordsReject(const FitContext& ctx, std::vector<CandidateWork>& work);
+void MaskWhatTheEstimationRecordsReject(const FitContext& ctx, std::vector<CandidateWork>& work, double floor_mse);
 // The rule an effect passes, as a single candidate or as the second of a pair: significant on the
 // estimation records, and on validation its change matches the gap (signature ≥ min_signature)
 // or it gains significantly.

@@ -526,7 +526,6 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
   // A sensor drift where it is not an actuator offset in disguise (on an integrator du is a
   // ramp) and not already taken by the shooting segments' own offsets.
   ctx.nuisance.drift = options.fit_drift && ctx.nuisance.segment == 0 && !ctx.integrating;
-  ctx.nuisance.clip_drift = options.fit_drift && ctx.nuisance.segment > 0;
   GapVerdict& v = report.verdict;
   v.fit_scheme = ctx.nuisance.segment > 0 ? "multiple_shooting" : "single_shooting";
   v.shooting_segment = ctx.nuisance.segment;
@@ -704,7 +703,8 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
     }
   if (disturbance_only) MaskGainsWithinColouredNoise(ctx, work);
   MaskLinearEffectsAtTheirIdentity(ctx, work);
-  MaskWhatTheEstimationRecordsReject(ctx, work);
+  MaskWhatTheEstimationRecordsReject(
+      ctx, work, floor_known ? floor.sigma * floor.sigma * SampleVarianceTolerance(n_est) : 0.0);
   report.ranking = RankCandidates(work, options);
   const double y_val_spread = (y_val.array() - y_val.mean()).matrix().norm() / std::sqrt(double(n_val));
 

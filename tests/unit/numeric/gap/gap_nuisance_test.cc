@@ -1549,33 +1549,6 @@ TEST(GapClipDriftTest, AClipReadThroughADriftingSensorIsTheClipAlone) {
   EXPECT_LT(v.nrmse_after, 1.1 * v.noise_nrmse);
 }
 
-// The same on an integrating rig (`idrig gap bench --cases 8 --seed 7404 --integrating --offsets
-// --add-drift 3 --only output_saturation`, case 23): fitted by multiple shooting, where the
-// segments' own offsets (inside the clip) took the drift and no ramp was fitted, so the clipped
-// readings moved from segment to segment under limits that could not. The clip alone left 5
-// times the noise variance on validation; `actuator_lag` + `sensor_nonlinearity` was named. One
-// drift rate per record behind the clip, shared by its segments (or none, where that leaves less).
-TEST(GapClipDriftTest, AClipOnAnIntegratingRigReadThroughADriftingSensorIsTheClipAlone) {
-  std::mt19937_64 rng(BenchCaseSeed(7404, 23));
-  GapCaseOptions options;
-  options.offsets = true;
-  options.integrating = true;
-  options.drift = 3;
-  const GapCase c = MakeGapCase(EffectKind::kOutputSaturation, rng, options);
-  const GapReport report = DiagnoseOnOneThread(c);
-  const GapVerdict& v = report.verdict;
-  std::printf("clip on an integrating rig behind a drifting sensor: verdict %s (%zu effects), NRMSE %.4f -> %.4f "
-              "floor %.4f, drift %.4g\n",
-              v.effect.c_str(), v.effects.size(), v.nrmse_before, v.nrmse_after, v.noise_nrmse,
-              v.nuisance.output_drift.empty() ? NAN : v.nuisance.output_drift[0]);
-  EXPECT_EQ(v.effect, "output_saturation");
-  EXPECT_EQ(v.effects.size(), 1u);
-  EXPECT_LT(v.nrmse_after, 1.1 * v.noise_nrmse);
-  // A rate is fitted per record (reported for the estimation record; there, 3 noise sigmas over
-  // the record are also within what du's ramp and the limits take up, and it may come out 0).
-  EXPECT_EQ(v.nuisance.output_drift.size(), 1u);
-}
-
 // A sensor re-zeroed part way through both records (8 noise sigmas at sample 1500 of the
 // estimation record, −8 at 2500 of the validation record). Against G0 a friction case's step is
 // smaller than what the missing friction leaves; the diagnosed model's residual shows it, and
