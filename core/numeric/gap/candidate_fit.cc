@@ -1284,10 +1284,11 @@ void FitEffect(const FitContext& ctx, EffectKind kind, CandidateWork& w) {
       // Behind |y| a plant whose output stays below the fold is read mirrored (|y| = −y): the
       // readings drift the other way from the plant, and the du that drives the plant is the one
       // that fits G0 to −y (ctx.mirrored_du, fitted beside G0 itself), which neither the refit
-      // nor G0 reaches (a refit keeps the sign of G0's gain). `gap bench --cases 260 --seed 7310 --integrating --offsets --only
-      // sensor_nonlinearity`, case 219: an actuator offset of −0.78 drove the integrator from
-      // −3 to −55; from the refit's du the |y| fit ran to du = −2.69, its bound, and left the
-      // estimation records where the refit did (0.367 for a noise variance of 0.215).
+      // nor G0 reaches (a refit keeps the sign of G0's gain). `gap bench --cases 260 --seed 7310
+      // --integrating --offsets --only sensor_nonlinearity`, case 219: an actuator offset of
+      // −0.78 drove the integrator from −3 to −55; from the refit's du the |y| fit ran to
+      // du = −2.69, its bound, and left the estimation records where the refit did (0.367 for a
+      // noise variance of 0.215).
       if (kind == EffectKind::kSensorNonlinearity && !fixed.empty()) {
         Eigen::VectorXd mirrored = from_g0;
         mirrored(ctx.refit_size - 1) = ctx.mirrored_du;

@@ -356,6 +356,9 @@ void MaskWhatTheEstimationRecordsReject(const FitContext& ctx, std::vector<Candi
 bool PassesEffectRule(const GapOptions& options, bool significant, double signature, bool gain_significant);
 // An effect (not none, not parameter_mismatch) may be the verdict: PassesEffectRule, not masked.
 bool EffectEligible(const GapOptions& options, const CandidateWork& w);
+// Any single candidate may rank as the verdict: none always, parameter_mismatch when it beats G0
+// significantly and is not masked, an effect when EffectEligible.
+bool CandidateEligible(const GapOptions& options, const CandidateWork& w);
 // Sorts `work` best first (eligible, then validation BIC) and returns the ranking.
 std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const GapOptions& options);
 // Masks a dead zone that is an input limit in disguise (ranking.cc), before RankCandidates;

@@ -293,15 +293,9 @@ void MaskLinearEffectsAtTheirIdentity(const FitContext& ctx, std::vector<Candida
 
 void MaskWhatTheEstimationRecordsReject(const FitContext& ctx, std::vector<CandidateWork>& work, double floor_mse) {
   const GapOptions& options = *ctx.options;
-  auto eligible = [&](const CandidateWork& w) {
-    const EffectKind kind = w.fit.effect.kind;
-    if (kind == EffectKind::kNone) return true;
-    if (kind == EffectKind::kParameterMismatch) return w.fit.significant && !w.masked;
-    return EffectEligible(options, w);
-  };
   CandidateWork *a = nullptr, *b = nullptr;  // the best two eligible singles by validation BIC
   for (CandidateWork& w : work) {
-    if (w.fit.effects.size() > 1 || !eligible(w)) continue;
+    if (w.fit.effects.size() > 1 || !CandidateEligible(options, w)) continue;
     if (!a || w.fit.bic < a->fit.bic) b = a, a = &w;
     else if (!b || w.fit.bic < b->fit.bic) b = &w;
   }
@@ -353,15 +347,17 @@ bool EffectEligible(const GapOptions& options, const CandidateWork& w) {
   return !w.masked && PassesEffectRule(options, w.fit.significant, w.fit.signature, w.gain_significant);
 }
 
+bool CandidateEligible(const GapOptions& options, const CandidateWork& w) {
+  const EffectKind kind = w.fit.effect.kind;
+  if (kind == EffectKind::kNone) return true;
+  if (kind == EffectKind::kParameterMismatch) return w.fit.significant && !w.masked;
+  return EffectEligible(options, w);
+}
+
 std::vector<CandidateFit> RankCandidates(std::vector<CandidateWork>& work, const GapOptions& options) {
   // Eligibility: an effect must beat the refitted G0 significantly and reproduce the gap's
   // signature; parameter_mismatch must beat G0; none is always eligible.
-  for (auto& w : work) {
-    CandidateFit& c = w.fit;
-    if (c.effect.kind == EffectKind::kNone) c.eligible = true;
-    else if (c.effect.kind == EffectKind::kParameterMismatch) c.eligible = c.significant && !w.masked;
-    else c.eligible = EffectEligible(options, w);
-  }
+  for (auto& w : work) w.fit.eligible = CandidateEligible(options, w);
   std::sort(work.begin(), work.end(), [](const CandidateWork& a, const CandidateWork& b) {
     if (a.fit.eligible != b.fit.eligible) return a.fit.eligible;
     return a.fit.bic < b.fit.bic;

@@ -215,12 +215,18 @@ INSTANTIATE_TEST_SUITE_P(
 
 // The bench's integrating plants (K/(s(Ts + 1)), a drifting record from the actuator offset), as
 // `idrig gap bench --integrating --offsets --seed 44` draws them: case `index`.
+// Case `index` of `idrig gap bench --seed SEED` with these options (as the bench draws it).
+GapCase SeededBenchCase(uint64_t seed, int index, const std::vector<EffectKind>& truth,
+                        const GapCaseOptions& options) {
+  std::mt19937_64 rng(BenchCaseSeed(seed, index));
+  return MakeGapCase(truth, rng, options);
+}
+
 // Case `index` of `idrig gap bench --seed SEED --offsets` with the rest of the options given:
 // an integrating plant, an excitation, a plant family ("" for the default).
 GapCase OffsetBenchCase(uint64_t seed, int index, const std::vector<EffectKind>& truth, bool integrating = false,
                         const std::string& excitation = "", const std::string& plants = "", int samples = 0,
                         double sample_time = 0) {
-  std::mt19937_64 rng(BenchCaseSeed(seed, index));
   GapCaseOptions options;
   if (samples > 0) options.samples = samples;
   if (sample_time > 0) options.sample_time = sample_time;
@@ -228,19 +234,18 @@ GapCase OffsetBenchCase(uint64_t seed, int index, const std::vector<EffectKind>&
   options.integrating = integrating;
   options.excitation = excitation;
   options.plants = plants;
-  return MakeGapCase(truth, rng, options);
+  return SeededBenchCase(seed, index, truth, options);
 }
 
 GapCase IntegratingBenchCase(EffectKind truth, int index) { return OffsetBenchCase(44, index, {truth}, true); }
 
 // `idrig gap bench --seed SEED --integrating --process-noise 0.5 --offsets`, case `index`.
 GapCase ProcessNoiseBenchCase(uint64_t seed, int index, EffectKind truth) {
-  std::mt19937_64 rng(BenchCaseSeed(seed, index));
   GapCaseOptions options;
   options.offsets = true;
   options.integrating = true;
   options.process_noise = 0.5;
-  return MakeGapCase(truth, rng, options);
+  return SeededBenchCase(seed, index, {truth}, options);
 }
 
 // The diagnosis as the bench runs it (one thread; the result does not depend on it).
@@ -1534,12 +1539,11 @@ INSTANTIATE_TEST_SUITE_P(Rigs, GapDriftTest,
 // there, and a sensor map beside it (its offset after the clip) was named. The ramp behind clips
 // now starts at zero with the record.
 TEST(GapClipDriftTest, AClipReadThroughADriftingSensorIsTheClipAlone) {
-  std::mt19937_64 rng(BenchCaseSeed(7403, 10));
   GapCaseOptions options;
   options.offsets = true;
   options.drift = 3;
   options.excitation = "noise";
-  const GapCase c = MakeGapCase(EffectKind::kOutputSaturation, rng, options);
+  const GapCase c = SeededBenchCase(7403, 10, {EffectKind::kOutputSaturation}, options);
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
   std::printf("clip behind a drifting sensor: verdict %s (%zu effects), NRMSE %.4f -> %.4f floor %.4f\n",
