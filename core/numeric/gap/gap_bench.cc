@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 
+#include "core/numeric/gap/gap_internal.h"
 #include "core/numeric/model/lti_model.h"
 #include "core/numeric/signal/excitation.h"
 #include "core/numeric/validation.h"
@@ -280,6 +282,75 @@ int Stage(EffectKind kind) {  // order in which effects act on the signal path
   }
 }
 
+// What the diagnosis's own fit absorbs of a record's output (GapCase::visibility_refit), as
+// columns over the record: with `plant_refit`, the output's sensitivity to each coefficient of the
+// linear part (the numerator's, and the denominator's but its leading 1 and its zeros, so that an
+// integrator stays one), by a forward difference; the sensitivities to the parameters of the
+// `others` effects and to an actuator offset; and with `segment` > 0 (multiple shooting) an
+// offset and the free response of every state per segment. `record(g, effects, u)` draws the
+// record, noise-free, from the rig with linear part g, those effects and input u.
+Eigen::MatrixXd RefitColumns(
+    const TransferFunction& plant, bool plant_refit, const std::vector<Effect>& others, const Eigen::VectorXd& u,
+    long segment, double ts,
+    const std::function<Eigen::VectorXd(const TransferFunction&, const std::vector<Effect>&, const Eigen::VectorXd&)>&
+        record) {
+  const Eigen::VectorXd base = record(plant, others, u);
+  std::vector<Eigen::VectorXd> cols;
+  const auto difference = [&](const TransferFunction& g, const std::vector<Effect>& effects,
+                              const Eigen::VectorXd& input, double h) {
+    cols.push_back((record(g, effects, input) - base) / h);
+  };
+  const auto step = [](double value) { return 1e-6 * std::max(std::abs(value), 1e-3); };
+  if (plant_refit) {
+    for (size_t i = 0; i < plant.num.size(); ++i) {
+      TransferFunction g = plant;
+      const double h = step(g.num[i]);
+      g.num[i] += h;
+      difference(g, others, u, h);
+    }
+    for (size_t i = 1; i < plant.den.size(); ++i) {
+      if (plant.den[i] == 0) continue;
+      TransferFunction g = plant;
+      const double h = step(g.den[i]);
+      g.den[i] += h;
+      difference(g, others, u, h);
+    }
+  }
+  // The other effect's parameters, refitted beside this one (a flag, such as the |y| sensor's,
+  // gives a zero column).
+  for (size_t j = 0; j < others.size(); ++j)
+    for (size_t i = 0; i < others[j].params.size(); ++i) {
+      std::vector<Effect> moved = others;
+      const double h = step(moved[j].params[i]);
+      moved[j].params[i] += h;
+      difference(plant, moved, u, h);
+    }
+  const double du = step(u.cwiseAbs().maxCoeff());
+  difference(plant, others, Eigen::VectorXd(u.array() + du), du);
+  if (segment > 0) {
+    GapRecord shape;
+    shape.y = Eigen::VectorXd::Zero(u.size());
+    const auto segments = gap_detail::Segments(shape, segment);
+    long longest = 0;
+    for (const auto& s : segments) longest = std::max(longest, s.second);
+    const Eigen::MatrixXd free = gap_detail::FreeResponse(gap_detail::SampledUndelayed(plant, ts), longest);
+    for (const auto& [start, length] : segments) {
+      Eigen::VectorXd level = Eigen::VectorXd::Zero(u.size());
+      level.segment(start, length).setOnes();
+      cols.push_back(level);
+      for (long j = 0; j < free.cols(); ++j) {
+        Eigen::VectorXd state = Eigen::VectorXd::Zero(u.size());
+        const long rows = std::min(length, static_cast<long>(free.rows()));
+        state.segment(start, rows) = free.col(j).head(rows);
+        cols.push_back(state);
+      }
+    }
+  }
+  Eigen::MatrixXd out(u.size(), static_cast<long>(cols.size()));
+  for (size_t j = 0; j < cols.size(); ++j) out.col(static_cast<long>(j)) = cols[j];
+  return out;
+}
+
 }  // namespace
 
 const std::vector<std::pair<EffectKind, EffectKind>>& CoOccurringEffectPairs() {
@@ -532,29 +603,70 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
   // GapCase::visibility: each record drawn again with the same load, noise and drift but
   // without each withheld effect in turn; the difference, less its least-squares fit on
   // [1, y without] ([1] for parameter_mismatch), over σ²; the larger of the two records.
+  // GapCase::visibility_refit: the same difference less its fit on those columns and on what the
+  // diagnosis's refit absorbs (RefitColumns).
+  const long segment = ShootingSegment(c.sim, options.samples, options.sample_time);
   for (size_t i = 0; i < c.truths.size(); ++i) {
     const EffectKind k = c.truths[i];
     if (k == EffectKind::kNone || !(c.noise_sigma > 0)) {
       c.visibility.push_back(std::numeric_limits<double>::infinity());
+      c.visibility_refit.push_back(std::numeric_limits<double>::infinity());
       continue;
     }
     std::vector<Effect> others;
     for (size_t j = 0; j < c.effects.size(); ++j)
       if (j != i) others.push_back(c.effects[j]);
     const bool mismatch = k == EffectKind::kParameterMismatch;
-    double most = 0;
+    const TransferFunction& plant = mismatch ? c.sim : c.real;
+    double most = 0, most_refit = 0;
     for (int r = 0; r < 2; ++r) {
       std::mt19937_64 replay = r == 0 ? estimation_draws : validation_draws;
-      const Eigen::VectorXd without = record_of(mismatch ? c.sim : c.real, others, r == 0 ? u_est : u_val,
-                                                c.noise_sigma, replay, r == 0 ? options.drift : -options.drift);
+      const Eigen::VectorXd& u = r == 0 ? u_est : u_val;
+      const Eigen::VectorXd without =
+          record_of(plant, others, u, c.noise_sigma, replay, r == 0 ? options.drift : -options.drift);
       Eigen::MatrixXd basis(without.size(), mismatch ? 1 : 2);
       basis.col(0).setOnes();
       if (!mismatch) basis.col(1) = without;
       const Eigen::VectorXd d = unglitched[r] - without;
       const Eigen::VectorXd left = d - basis * basis.colPivHouseholderQr().solve(d);
       most = std::max(most, left.squaredNorm() / (c.noise_sigma * c.noise_sigma));
+      // The refit's columns from noise-free records (a quantiser's rounding left out: its steps are
+      // not a sensitivity).
+      std::vector<Effect> smooth;
+      double q = 0;  // the other effect's quantiser step, if it is one
+      for (const Effect& e : others)
+        if (e.kind != EffectKind::kOutputQuantization) smooth.push_back(e);
+        else q = e.params[0];
+      const auto noise_free = [&](const TransferFunction& g, const std::vector<Effect>& effects,
+                                  const Eigen::VectorXd& input) {
+        std::mt19937_64 none(0);
+        return record_of(g, effects, input, 0.0, none, 0.0);
+      };
+      // Beside a quantiser, Δy of the same noise is the rounding flips the effect causes, each a
+      // whole step, which a test that did not know the noise cannot place: the noise dithers the
+      // quantiser, which then passes the effect's own Δy (from the records without the quantiser)
+      // in noise of variance σ² + q²/12.
+      Eigen::VectorXd d_refit = d;
+      double variance = c.noise_sigma * c.noise_sigma;
+      if (q > 0) {
+        std::vector<Effect> with = smooth;
+        with.push_back(c.effects[i]);
+        d_refit = noise_free(c.real, with, u) - noise_free(plant, smooth, u);
+        variance += q * q / 12;
+      }
+      Eigen::MatrixXd refit(basis.rows(), basis.cols());
+      refit << basis;
+      const auto append = [&](const Eigen::MatrixXd& cols) {
+        Eigen::MatrixXd wider(refit.rows(), refit.cols() + cols.cols());
+        wider << refit, cols;
+        refit.swap(wider);
+      };
+      append(RefitColumns(plant, !mismatch, smooth, u, segment, options.sample_time, noise_free));
+      const Eigen::VectorXd left_refit = d_refit - refit * refit.colPivHouseholderQr().solve(d_refit);
+      most_refit = std::max(most_refit, left_refit.squaredNorm() / variance);
     }
     c.visibility.push_back(most);
+    c.visibility_refit.push_back(most_refit);
   }
   return c;
 }
@@ -628,11 +740,14 @@ GapBenchScore ScoreGapBench(const std::vector<GapBenchOutcome>& outcomes) {
     };
     count(decidable, s.decidable_single_cases, s.decidable_single_correct, s.decidable_combo_cases,
           s.decidable_combo_both);
-    const bool detectable = decidable && std::all_of(o.visibility.begin(), o.visibility.end(), [](double v) {
-                              return v >= BenchVisibilityThreshold();
-                            });
+    const auto visible = [](const std::vector<double>& v) {
+      return std::all_of(v.begin(), v.end(), [](double x) { return x >= BenchVisibilityThreshold(); });
+    };
+    const bool detectable = decidable && visible(o.visibility);
     count(detectable, s.detectable_single_cases, s.detectable_single_correct, s.detectable_combo_cases,
           s.detectable_combo_both);
+    count(detectable && visible(o.visibility_refit), s.refit_single_cases, s.refit_single_correct,
+          s.refit_combo_cases, s.refit_combo_both);
     if (truth.size() == 1) {
       ++s.single_cases;
       ++s.by_excitation[o.excitation].second;
@@ -668,6 +783,8 @@ GapBenchScore ScoreGapBench(const std::vector<GapBenchOutcome>& outcomes) {
   s.combo_both_decidable = s.decidable_combo_cases ? double(s.decidable_combo_both) / s.decidable_combo_cases : 0.0;
   s.top1_detectable = s.detectable_single_cases ? double(s.detectable_single_correct) / s.detectable_single_cases : 0.0;
   s.combo_both_detectable = s.detectable_combo_cases ? double(s.detectable_combo_both) / s.detectable_combo_cases : 0.0;
+  s.top1_refit = s.refit_single_cases ? double(s.refit_single_correct) / s.refit_single_cases : 0.0;
+  s.combo_both_refit = s.refit_combo_cases ? double(s.refit_combo_both) / s.refit_combo_cases : 0.0;
   return s;
 }
 

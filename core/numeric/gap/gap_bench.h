@@ -88,6 +88,16 @@ struct GapCase {
   // knew the effect and everything else: an upper bound on what any diagnosis can see (a refit
   // of the plant's dynamics or a free state per shooting segment absorbs more). `none`: +inf.
   std::vector<double> visibility;
+  // The same with what the diagnosis's own fit absorbs also taken out (GapCase::visibility is an
+  // upper bound that it does not reach on an integrating rig): beside the offset and the gain,
+  // the refit of the rig's linear part (the output's sensitivities to its coefficients) but for
+  // parameter_mismatch, of the other withheld effect's parameters (a quantiser's aside), an
+  // actuator offset, and where G0 is fitted by multiple shooting (ShootingSegment) an offset and
+  // a free state per segment. Beside a quantiser, Δy is taken without it and over σ² + q²/12 (the
+  // noise dithers the quantiser: the rounding flips of one noise draw are no evidence a test can
+  // place). A linearised estimate of the noncentrality of the diagnosis's own likelihood-ratio
+  // test, still an upper bound (the effect's own parameters are the truth's).
+  std::vector<double> visibility_refit;
 };
 
 // The visibility (GapCase::visibility) under which a withheld effect is within the noise: the
@@ -156,6 +166,7 @@ struct GapBenchOutcome {
   std::vector<std::string> effects;     // verdict.effects' names (one or two)
   std::string excitation;
   std::vector<double> visibility;       // GapCase::visibility (empty: not known, counted as visible)
+  std::vector<double> visibility_refit; // GapCase::visibility_refit (empty: not known, counted as visible)
   double shrink = 0, confidence = 0, seconds = 0;
 };
 
@@ -183,6 +194,11 @@ struct GapBenchScore {
   int detectable_single_cases = 0, detectable_single_correct = 0;
   int detectable_combo_cases = 0, detectable_combo_both = 0;
   double top1_detectable = 0, combo_both_detectable = 0;
+  // The detectable cases whose withheld effects each also show above the noise after the refit
+  // (visibility_refit at least BenchVisibilityThreshold()).
+  int refit_single_cases = 0, refit_single_correct = 0;
+  int refit_combo_cases = 0, refit_combo_both = 0;
+  double top1_refit = 0, combo_both_refit = 0;
   double mean_seconds = 0;
   // rows: the truth ("a" or "a+b"); columns: the named effects ("x" or "x+y") with counts.
   std::map<std::string, std::map<std::string, int>> confusion;

@@ -123,19 +123,12 @@ double SlowTimeConstant(const TransferFunction& plant, double ts, double duratio
 // a true integrator (a pole within 1e-6/Ts of 0) also gets an input offset in every candidate.
 void ChooseFitScheme(const TransferFunction& g0, const std::vector<GapRecord>& estimation, double ts,
                      FitContext& ctx) {
-  const long longest = LongestScored(estimation);
   const Eigen::VectorXcd p = Poles(g0);
-  double slowest = INFINITY;
-  bool integrator = false;
-  for (int i = 0; i < p.size(); ++i) {
-    slowest = std::min(slowest, -p(i).real());
-    if (std::abs(p(i)) < 1e-6 / ts) integrator = true;
-  }
-  ctx.integrating = integrator;
+  ctx.integrating = false;
+  for (int i = 0; i < p.size(); ++i)
+    if (std::abs(p(i)) < 1e-6 / ts) ctx.integrating = true;
   ctx.nuisance = CandidateSpec{};
-  if (p.size() > 0 && slowest * longest * ts < 5.0)
-    ctx.nuisance.segment = std::max<long>(longest / 8, 100 * (g0.Order() + 1));
-  if (ctx.nuisance.segment >= longest) ctx.nuisance.segment = 0;
+  ctx.nuisance.segment = ShootingSegment(g0, LongestScored(estimation), ts);
 }
 
 // The floor of what a candidate leaves: the noise floor's ARX estimator (gap_noise.h) on its
@@ -196,6 +189,15 @@ bool InputExplainsResidual(const std::vector<GapRecord>& validation, const Eigen
 }
 
 }  // namespace
+
+long ShootingSegment(const TransferFunction& g0, long samples, double ts) {
+  const Eigen::VectorXcd p = Poles(g0);
+  double slowest = INFINITY;
+  for (int i = 0; i < p.size(); ++i) slowest = std::min(slowest, -p(i).real());
+  if (p.size() == 0 || !(slowest * samples * ts < 5.0)) return 0;
+  const long segment = std::max<long>(samples / 8, 100 * (g0.Order() + 1));
+  return segment >= samples ? 0 : segment;
+}
 
 bool gap_detail::ResidualFollowsInput(const std::vector<GapRecord>& validation, const Eigen::VectorXd& residual,
                                       std::string* note) {

@@ -310,6 +310,18 @@ TEST(GapBenchTest, ScoresCountBothNamedOrderFreeAndTopOneAsEitherOfThePair) {
   EXPECT_EQ(s.detectable_combo_cases, 1);
   EXPECT_EQ(s.detectable_combo_both, 1);
   EXPECT_DOUBLE_EQ(s.combo_both_detectable, 1.0);
+  // After the refit: the detectable cases whose effects also show above the threshold once the
+  // refit is taken out; an unknown visibility_refit (all of the above) counts as visible.
+  EXPECT_EQ(s.refit_single_cases, 3);
+  EXPECT_EQ(s.refit_combo_cases, 1);
+  o.push_back({{EffectKind::kActuatorLag}, "none", {}, "levels", {200.0}, {3.0}});  // the refit takes it up
+  o.push_back({{EffectKind::kTimeDelay}, "time_delay", {"time_delay"}, "levels", {200.0}, {40.0}});
+  const GapBenchScore t = ScoreGapBench(o);
+  EXPECT_EQ(t.detectable_single_cases, 5);
+  EXPECT_EQ(t.detectable_single_correct, 3);
+  EXPECT_EQ(t.refit_single_cases, 4);
+  EXPECT_EQ(t.refit_single_correct, 3);
+  EXPECT_DOUBLE_EQ(t.top1_refit, 0.75);
 }
 
 TEST(GapBenchTest, BadPairsAndSharesAreNamed) {
@@ -431,6 +443,45 @@ TEST(GapBenchTest, VisibilityIsWhatNoGainAndOffsetAbsorbAgainstTheNoise) {
     EXPECT_NEAR(c.visibility[0] / expected, 1.0, 0.15) << "case " << i << ", q " << q;
   }
   EXPECT_EQ(quantisers, 3);
+}
+
+// GapCase::visibility_refit against a closed form: a static map of a two-valued input is affine
+// (a gain and an offset of the command), so the rig's output with it is the output without it
+// times a gain plus the response to a constant input — the refit of the linear part and the
+// actuator offset take it up exactly. On an integrating rig the second is a ramp, which the
+// offset and gain of GapCase::visibility do not absorb (`gap bench --cases 26 --seed 7406
+// --integrating --offsets`, cases 5, 6, 19, 20: visibility above the threshold, `ambiguous`).
+TEST(GapBenchTest, TheRefitTakesUpAnInputMapOfATwoValuedInputWhichTheGainAndOffsetDoNot) {
+  GapCaseOptions options;
+  options.offsets = true;
+  options.integrating = true;
+  options.excitation = "prbs";
+  int overstated = 0;
+  for (EffectKind k : {EffectKind::kInputSaturation, EffectKind::kDeadZone, EffectKind::kBacklash}) {
+    for (int i = 0; i < 2; ++i) {
+      std::mt19937_64 rng(BenchCaseSeed(7406, 100 + i));
+      const GapCase c = MakeGapCase({k}, rng, options);
+      ASSERT_EQ(c.visibility_refit.size(), 1u);
+      EXPECT_LT(c.visibility_refit[0], 1e-6 * std::max(1.0, c.visibility[0])) << EffectName(k) << ", draw " << i;
+      overstated += c.visibility[0] > BenchVisibilityThreshold();
+    }
+  }
+  EXPECT_GE(overstated, 3) << "the gain and offset alone leave the ramp";
+  // A dynamic effect is not affine in the input: the refit leaves most of a delay of a few samples
+  // on a first-order rig (single shooting) visible.
+  GapCaseOptions plain;
+  plain.excitation = "prbs";
+  int delays = 0;
+  for (int i = 0; i < 40; ++i) {
+    if (BenchCaseTruth(i, 0.0)[0] != EffectKind::kTimeDelay) continue;
+    ++delays;
+    std::mt19937_64 rng(BenchCaseSeed(7406, i));
+    const GapCase c = MakeGapCase({EffectKind::kTimeDelay}, rng, plain);
+    ASSERT_EQ(c.visibility_refit.size(), 1u);
+    EXPECT_LE(c.visibility_refit[0], c.visibility[0] * (1 + 1e-9)) << "a projection on more columns";
+    EXPECT_GT(c.visibility_refit[0], BenchVisibilityThreshold()) << "case " << i;
+  }
+  EXPECT_EQ(delays, 3);
 }
 
 }  // namespace

@@ -454,6 +454,47 @@ TEST(GapIntegratingTest, WhereTheValidationRecordsCannotTellTwoFitsApartTheEstim
   EXPECT_NE(lag.note.find("the estimation records can"), std::string::npos);
 }
 
+TEST(GapIntegratingTest, TheBenchsVisibilityAfterTheRefitAgreesWithTheDiagnosisOnAnIntegratingRig) {
+  // `idrig gap bench --cases 26 --seed 7406 --integrating --offsets`, case 14: a parameter
+  // mismatch (velocity gain 1.48 for 1.47, time constant 0.174 s for 0.155 s) under a staircase.
+  // GapCase::visibility read 225, far above the threshold, and the case counted as detectable;
+  // yet the free state of each shooting segment and the actuator offset take up the steady lag
+  // the mismatch leaves, and the diagnosis (an independent fit) finds it within the noise. The
+  // bench's visibility after the refit says so as well.
+  const GapCase c = OffsetBenchCase(7406, 14, {EffectKind::kParameterMismatch}, true);
+  ASSERT_EQ(c.visibility_refit.size(), 1u);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const CandidateFit& mismatch = Ranked(report, EffectKind::kParameterMismatch);
+  std::printf("parameter mismatch on an integrator: visibility %.1f, after the refit %.1f; the diagnosis's LR %.1f "
+              "(threshold %.1f), verdict %s\n",
+              c.visibility[0], c.visibility_refit[0], mismatch.likelihood_ratio, mismatch.lr_threshold,
+              report.verdict.effect.c_str());
+  EXPECT_GT(c.visibility[0], 10 * BenchVisibilityThreshold());
+  EXPECT_LT(c.visibility_refit[0], BenchVisibilityThreshold());
+  EXPECT_LT(mismatch.likelihood_ratio, mismatch.lr_threshold);
+  EXPECT_EQ(report.verdict.effect, "none");
+}
+
+TEST(GapIntegratingTest, BesideACoarseQuantiserTheBenchsVisibilityAfterTheRefitCountsNoRoundingFlips) {
+  // `idrig gap bench --cases 40 --seed 5002 --combos 1 --pairs any --integrating --offsets`, case
+  // 26: a resonance (15.3 rad/s, ζ 0.13) beside a quantiser of step 0.69 at a noise σ of 0.12.
+  // With the same noise draw the resonance moved samples across rounding thresholds, whole steps
+  // each, and GapCase::visibility read about 2100; against the dithered quantiser's noise
+  // (σ² + q²/12) the refit leaves it within the noise, and the diagnosis finds no resonance.
+  const std::vector<EffectKind> truth = BenchCaseTruth(26, 1.0, true);
+  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kUnmodelledResonance, EffectKind::kOutputQuantization}));
+  const GapCase c = OffsetBenchCase(5002, 26, truth, true);
+  ASSERT_EQ(c.visibility_refit.size(), 2u);
+  const GapReport report = DiagnoseOnOneThread(c);
+  std::printf("resonance beside a quantiser: visibility %.1f, after the refit %.2f; verdict %s (%zu effects)\n",
+              c.visibility[0], c.visibility_refit[0], report.verdict.effect.c_str(), report.verdict.effects.size());
+  EXPECT_GT(c.visibility[0], 10 * BenchVisibilityThreshold());
+  EXPECT_LT(c.visibility_refit[0], BenchVisibilityThreshold());
+  EXPECT_GT(c.visibility_refit[1], BenchVisibilityThreshold()) << "the quantiser itself shows";
+  EXPECT_EQ(report.verdict.effect, "output_quantization");
+  for (const auto& e : report.verdict.effects) EXPECT_NE(e.kind, EffectKind::kUnmodelledResonance);
+}
+
 TEST(GapIntegratingTest, ABacklashIsFittedFromWhereItsPlayWasBeforeTheRecord) {
   // `idrig gap bench --cases 54 --seed 980 --combos 1 --pairs any --integrating --offsets
   // --excitation levels`, case 4, with the backlash alone: the bench's rig warmed up at zero
