@@ -808,6 +808,29 @@ TEST_P(GapIntegratingProcessNoiseTest, AWalkWithinTheShootingSegmentsIsNotAnEffe
 INSTANTIATE_TEST_SUITE_P(Seed2002, GapIntegratingProcessNoiseTest, ::testing::Values(78, 117, 195, 234),
                          [](const auto& info) { return "case" + std::to_string(info.param); });
 
+// An input saturation under a random binary input on an integrating rig under process noise
+// (`idrig gap bench --cases 26 --seed 2005 --integrating --process-noise 0.5 --offsets`, case 5).
+// On a two-valued input the saturation is a gain (GapCase::visibility_refit about 1e-11: the
+// refit takes it up entirely), so the honest verdict is `ambiguous` among the gain-like
+// explanations; a sensor map fitted to the walk within the 500-sample segments was named at LR
+// 53, validation gain z 4.1 and signature 0.197. On 250-sample segments the diagnosis names the
+// tie with a gain change, which does not hold the sensor map, and that diagnosis now stands.
+TEST(GapIntegratingTest, UnderProcessNoiseATwoValuedInputsGainTieOnShorterSegmentsStands) {
+  const GapCase c = ProcessNoiseBenchCase(2005, 5, EffectKind::kInputSaturation);
+  ASSERT_EQ(c.excitation, "rbs");
+  ASSERT_EQ(c.visibility_refit.size(), 1u);
+  EXPECT_LT(c.visibility_refit[0], 1e-6);
+  const GapReport report = DiagnoseOnOneThread(c);
+  const GapVerdict& v = report.verdict;
+  const std::string again = LastNoteWith(report, "diagnosed again with segments of");
+  std::printf("input saturation under a binary input and process noise: verdict %s, segment %ld; %s\n",
+              v.effect.c_str(), v.shooting_segment, again.c_str());
+  EXPECT_EQ(v.effect, "ambiguous");
+  EXPECT_EQ(v.shooting_segment, 250);
+  EXPECT_NE(std::find(v.tied.begin(), v.tied.end(), "input_saturation"), v.tied.end());
+  EXPECT_NE(again.find("it names only a tie with a gain change"), std::string::npos) << again;
+}
+
 // A speed sensor that cannot see the sign (y = |x| + b) on an integrating rig under process noise
 // (`idrig gap bench --cases 26 --seed 2005 --integrating --process-noise 0.5 --offsets`, case 24,
 // PRBS). Behind |y| the shooting segments share the sensor's offset b (PredictFrom), and a
