@@ -302,13 +302,13 @@ Eigen::MatrixXd RefitColumns(
   };
   const auto step = [](double value) { return 1e-6 * std::max(std::abs(value), 1e-3); };
   if (plant_refit) {
-    for (size_t i = 0; i < plant.num.size(); ++i) {
+    for (long i = 0; i < plant.num.size(); ++i) {
       TransferFunction g = plant;
       const double h = step(g.num[i]);
       g.num[i] += h;
       difference(g, others, u, h);
     }
-    for (size_t i = 1; i < plant.den.size(); ++i) {
+    for (long i = 1; i < plant.den.size(); ++i) {
       if (plant.den[i] == 0) continue;
       TransferFunction g = plant;
       const double h = step(g.den[i]);
@@ -654,14 +654,9 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
         d_refit = noise_free(c.real, with, u) - noise_free(plant, smooth, u);
         variance += q * q / 12;
       }
-      Eigen::MatrixXd refit(basis.rows(), basis.cols());
-      refit << basis;
-      const auto append = [&](const Eigen::MatrixXd& cols) {
-        Eigen::MatrixXd wider(refit.rows(), refit.cols() + cols.cols());
-        wider << refit, cols;
-        refit.swap(wider);
-      };
-      append(RefitColumns(plant, !mismatch, smooth, u, segment, options.sample_time, noise_free));
+      const Eigen::MatrixXd taken = RefitColumns(plant, !mismatch, smooth, u, segment, options.sample_time, noise_free);
+      Eigen::MatrixXd refit(basis.rows(), basis.cols() + taken.cols());
+      refit << basis, taken;
       const Eigen::VectorXd left_refit = d_refit - refit * refit.colPivHouseholderQr().solve(d_refit);
       most_refit = std::max(most_refit, left_refit.squaredNorm() / variance);
     }

@@ -166,7 +166,7 @@ struct GapBenchOutcome {
   std::vector<std::string> effects;     // verdict.effects' names (one or two)
   std::string excitation;
   std::vector<double> visibility;       // GapCase::visibility (empty: not known, counted as visible)
-  std::vector<double> visibility_refit; // GapCase::visibility_refit (empty: not known, counted as visible)
+  std::vector<double> visibility_refit{};  // GapCase::visibility_refit (empty: not known, counted as visible)
   double shrink = 0, confidence = 0, seconds = 0;
 };
 

@@ -248,12 +248,13 @@ void SplitRecord(const GapRecord& record, std::vector<GapRecord>& estimation,
 GapWhere LocateGap(const TransferFunction& sim_model, const std::vector<GapRecord>& records,
                    double noise_sigma);
 
-// The front ends' conversions: a SISO sim model (tf, or ss with one input and one output) as a
-// transfer function, and a SISO record (t,u,y). Throw std::invalid_argument for MIMO.
 // Samples per shooting segment of the diagnosis of G0 on records of `samples` at `ts` (0: single
 // shooting): multiple shooting when G0's slowest mode decays by less than e^-5 over the record
 // (an integrator, a lightly damped mode), segments of max(N/8, 100·(n+1)) samples.
 long ShootingSegment(const TransferFunction& g0, long samples, double ts);
+
+// The front ends' conversions: a SISO sim model (tf, or ss with one input and one output) as a
+// transfer function, and a SISO record (t,u,y). Throw std::invalid_argument for MIMO.
 TransferFunction SimModelTransferFunction(const LtiModel& model);
 GapRecord ToGapRecord(const IoRecord& record);
 

@@ -213,8 +213,6 @@ INSTANTIATE_TEST_SUITE_P(
       return std::string(EffectName(info.param.first)) + "_with_" + EffectName(info.param.second);
     });
 
-// The bench's integrating plants (K/(s(Ts + 1)), a drifting record from the actuator offset), as
-// `idrig gap bench --integrating --offsets --seed 44` draws them: case `index`.
 // Case `index` of `idrig gap bench --seed SEED` with these options (as the bench draws it).
 GapCase SeededBenchCase(uint64_t seed, int index, const std::vector<EffectKind>& truth,
                         const GapCaseOptions& options) {
@@ -237,6 +235,8 @@ GapCase OffsetBenchCase(uint64_t seed, int index, const std::vector<EffectKind>&
   return SeededBenchCase(seed, index, truth, options);
 }
 
+// The bench's integrating plants (K/(s(Ts + 1)), a drifting record from the actuator offset), as
+// `idrig gap bench --integrating --offsets --seed 44` draws them: case `index`.
 GapCase IntegratingBenchCase(EffectKind truth, int index) { return OffsetBenchCase(44, index, {truth}, true); }
 
 // `idrig gap bench --seed SEED --integrating --process-noise 0.5 --offsets`, case `index`.
@@ -563,11 +563,10 @@ TEST_P(GapColouredNoiseTest, AHigherOrderPartThatFollowsTheNoisesWanderIsNotMiss
   // correlation (z 2.52); the automatic lag gives 1.88. Since stop 27 the order check is not run
   // against the verdict at all when what G0 or the verdict leaves does not follow the input
   // (coloured noise does not): either reason keeps the effect.
-  std::mt19937_64 rng(BenchCaseSeed(71, GetParam().index));
   GapCaseOptions options;
   options.offsets = true;
   options.noise_pole = 0.9;
-  const GapCase c = MakeGapCase(GetParam().truth, rng, options);
+  const GapCase c = SeededBenchCase(71, GetParam().index, {GetParam().truth}, options);
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
   std::string gain;
@@ -595,11 +594,10 @@ TEST(GapColouredNoiseTest, AGainChangeUnderATwoValuedInputIsAmbiguousThoughTheLr
   // against the full refit (32, above the threshold: the full refit's other coefficients follow
   // the noise's 19-sample wander) had made it parameter_mismatch; the full refit's validation
   // gain over the gain alone (z −0.3) shows no change of the dynamics, so it is `ambiguous`.
-  std::mt19937_64 rng(BenchCaseSeed(71, 5));
   GapCaseOptions options;
   options.offsets = true;
   options.noise_pole = 0.9;
-  const GapCase c = MakeGapCase(EffectKind::kInputSaturation, rng, options);
+  const GapCase c = SeededBenchCase(71, 5, {EffectKind::kInputSaturation}, options);
   ASSERT_TRUE(c.excitation == "rbs" || c.excitation == "prbs") << c.excitation;
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
@@ -616,12 +614,11 @@ TEST(GapColouredNoiseTest, AMismatchOfTheDynamicsUnderATwoValuedInputStaysAParam
   // --seed 1021 --offsets --only parameter_mismatch --excitation rbs --noise-pole 0.9`, case 1).
   // The full refit simulates the validation record far better than the gain alone (z 15), so
   // the two-valued input does not make it ambiguous.
-  std::mt19937_64 rng(BenchCaseSeed(1021, 1));
   GapCaseOptions options;
   options.offsets = true;
   options.noise_pole = 0.9;
   options.excitation = "rbs";
-  const GapCase c = MakeGapCase(EffectKind::kParameterMismatch, rng, options);
+  const GapCase c = SeededBenchCase(1021, 1, {EffectKind::kParameterMismatch}, options);
   const GapReport report = DiagnoseOnOneThread(c);
   const std::string note = LastNoteWith(report, "the input takes two values only");
   std::printf("parameter mismatch under rbs, coloured noise: verdict %s; %s\n", report.verdict.effect.c_str(),
@@ -645,11 +642,10 @@ struct ProcessNoiseCase {
 class GapProcessNoiseTest : public ::testing::TestWithParam<ProcessNoiseCase> {};
 
 TEST_P(GapProcessNoiseTest, ALoadDisturbanceThePlantColoursIsNotAnEffect) {
-  std::mt19937_64 rng(BenchCaseSeed(2001, GetParam().index));
   GapCaseOptions options;
   options.offsets = true;
   options.process_noise = GetParam().share;
-  const GapCase c = MakeGapCase(EffectKind::kNone, rng, options);
+  const GapCase c = SeededBenchCase(2001, GetParam().index, {EffectKind::kNone}, options);
   const GapReport report = DiagnoseOnOneThread(c);
   const std::string was_note = Ranked(report, EffectFromName(GetParam().was)).note;
   std::printf("none under process noise (%s): verdict %s; %s: %s\n", c.excitation.c_str(),
@@ -698,12 +694,11 @@ TEST(GapProcessNoiseTest, AFrictionThatReproducesASlowGapIsKeptThoughItsGainIsAs
 
 // Case `index` of `idrig gap bench --seed SEED --offsets --integrating --noise-pole POLE`.
 GapCase IntegratingColouredNoiseCase(uint64_t seed, int index, double noise_pole) {
-  std::mt19937_64 rng(BenchCaseSeed(seed, index));
   GapCaseOptions options;
   options.offsets = true;
   options.integrating = true;
   options.noise_pole = noise_pole;
-  return MakeGapCase(BenchCaseTruth(index, 0).front(), rng, options);
+  return SeededBenchCase(seed, index, {BenchCaseTruth(index, 0).front()}, options);
 }
 
 TEST(GapColouredNoiseTest, ALagFittedToNothingIsNotNamed) {
@@ -734,11 +729,10 @@ TEST(GapOffsetTest, AClipThatOnlyTheEstimationRecordReachesIsNamedAsNotConfirmed
   // been `none`, "G0 fits within the noise". The clip is named, as found on the estimation
   // records only, with the limits where the bench put them (in the measured coordinates: the
   // rig's limits plus its sensor offset).
-  std::mt19937_64 rng(BenchCaseSeed(4020, 62));
   GapCaseOptions options;
   options.offsets = true;
   options.snr_db = 20;
-  const GapCase c = MakeGapCase(BenchCaseTruth(62, 0), rng, options);
+  const GapCase c = SeededBenchCase(4020, 62, BenchCaseTruth(62, 0), options);
   ASSERT_EQ(c.truth, EffectKind::kOutputSaturation);
   const GapReport report = DiagnoseOnOneThread(c);
   std::printf("clip on the estimation record only: verdict %s, estimation_only %d, g0_gap %s\n",
@@ -860,12 +854,11 @@ TEST(GapPairTest, APairWhoseSecondEffectAddsNothingIsNotReported) {
   // refitted alone from the pair's fit) dropped the pair. Since the output maps act on the
   // segment's state the single fit reaches the noise floor and the pair search does not run.
   // Either way one effect is reported; a pair that is searched must be dropped.
-  std::mt19937_64 rng(BenchCaseSeed(51, 23));
   GapCaseOptions options;
   options.offsets = true;
   options.sample_time = 0.002;
   options.samples = 6000;
-  const GapCase c = MakeGapCase(EffectKind::kOutputSaturation, rng, options);
+  const GapCase c = SeededBenchCase(51, 23, {EffectKind::kOutputSaturation}, options);
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
   const std::string backward = LastNoteWith(report, "backward check");
@@ -886,11 +879,10 @@ TEST(GapPairTest, AnEffectThatFailsAsSecondAfterTheMainOneCannotComeFirstInstead
   // the lowest validation BIC, so the verdict was sensor_nonlinearity + friction. The backward
   // check shows which is the main effect (friction alone 27.8 BIC units above the pair, the
   // sensor map alone 29902), and the sensor map must pass as a second after it.
-  std::mt19937_64 rng(BenchCaseSeed(97, 21));
   GapCaseOptions options;
   options.offsets = true;
   options.snr_db = 60;
-  const GapCase c = MakeGapCase(EffectKind::kCoulombFriction, rng, options);
+  const GapCase c = SeededBenchCase(97, 21, {EffectKind::kCoulombFriction}, options);
   const GapReport report = DiagnoseOnOneThread(c);
   const GapVerdict& v = report.verdict;
   const std::string backward = LastNoteWith(report, "backward check");
@@ -1107,14 +1099,13 @@ TEST(GapPairTest, ARecordSplitInTimeWeighsItsFirstEffectsResidualOverTheWholeRec
 GapReport SearchedThoughWithinTheFloor(uint64_t seed, int index, double combos, bool any_pairs,
                                        const std::string& plants, const std::vector<EffectKind>& expected,
                                        const char* why, const std::string& first, const char* what) {
-  std::mt19937_64 rng(BenchCaseSeed(seed, index));
   GapCaseOptions options;
   options.offsets = true;
   options.snr_db = 20;
   options.plants = plants;
   const std::vector<EffectKind> truth = BenchCaseTruth(index, combos, any_pairs);
   EXPECT_EQ(truth, expected) << "the bench's pair " << index << " moved";
-  const GapCase c = MakeGapCase(truth, rng, options);
+  const GapCase c = SeededBenchCase(seed, index, truth, options);
   GapReport report = DiagnoseAndPrint(c, what);
   const std::string searched = LastNoteWith(report, why);
   std::printf("%s\n", searched.c_str());
@@ -1489,11 +1480,10 @@ TEST(GapOffsetTest, OfTwoBarelyReachedLimitsTheUnreachedOneIsReleased) {
   // neither was released; the upper one stayed at the edge of the estimation records and
   // clipped validation samples beyond it, and the one-sided dead zone won (dead_zone, du at
   // its bound). Now the unreached one is released and the limit named.
-  std::mt19937_64 rng(BenchCaseSeed(52, 18));
   GapCaseOptions options;
   options.offsets = true;
   options.sample_time = 0.05;
-  const GapCase c = MakeGapCase(EffectKind::kInputSaturation, rng, options);
+  const GapCase c = SeededBenchCase(52, 18, {EffectKind::kInputSaturation}, options);
   const GapReport report = DiagnoseOnOneThread(c);
   const CandidateFit& limit = Ranked(report, EffectKind::kInputSaturation);
   std::printf("barely reached limits: verdict %s; the limit's note: %s\n", report.verdict.effect.c_str(),
