@@ -618,6 +618,25 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
       if (j != i) others.push_back(c.effects[j]);
     const bool mismatch = k == EffectKind::kParameterMismatch;
     const TransferFunction& plant = mismatch ? c.sim : c.real;
+    // The refit's columns from noise-free records (a quantiser's rounding left out: its steps are
+    // not a sensitivity).
+    std::vector<Effect> smooth;
+    double q = 0;  // the other effect's quantiser step, if it is one
+    for (const Effect& e : others)
+      if (e.kind != EffectKind::kOutputQuantization) smooth.push_back(e);
+      else q = e.params[0];
+    const auto noise_free = [&](const TransferFunction& g, const std::vector<Effect>& effects,
+                                const Eigen::VectorXd& input) {
+      std::mt19937_64 none(0);
+      return record_of(g, effects, input, 0.0, none, 0.0);
+    };
+    // Beside a quantiser, Δy of the same noise is the rounding flips the effect causes, each a
+    // whole step, which a test that did not know the noise cannot place: the noise dithers the
+    // quantiser, which then passes the effect's own Δy (from the records without the quantiser,
+    // `with` and `smooth`) in noise of variance σ² + q²/12.
+    std::vector<Effect> with = smooth;
+    with.push_back(c.effects[i]);
+    const double variance = c.noise_sigma * c.noise_sigma + q * q / 12;
     double most = 0, most_refit = 0;
     for (int r = 0; r < 2; ++r) {
       std::mt19937_64 replay = r == 0 ? estimation_draws : validation_draws;
@@ -630,30 +649,8 @@ GapCase MakeGapCase(const std::vector<EffectKind>& truths, std::mt19937_64& rng,
       const Eigen::VectorXd d = unglitched[r] - without;
       const Eigen::VectorXd left = d - basis * basis.colPivHouseholderQr().solve(d);
       most = std::max(most, left.squaredNorm() / (c.noise_sigma * c.noise_sigma));
-      // The refit's columns from noise-free records (a quantiser's rounding left out: its steps are
-      // not a sensitivity).
-      std::vector<Effect> smooth;
-      double q = 0;  // the other effect's quantiser step, if it is one
-      for (const Effect& e : others)
-        if (e.kind != EffectKind::kOutputQuantization) smooth.push_back(e);
-        else q = e.params[0];
-      const auto noise_free = [&](const TransferFunction& g, const std::vector<Effect>& effects,
-                                  const Eigen::VectorXd& input) {
-        std::mt19937_64 none(0);
-        return record_of(g, effects, input, 0.0, none, 0.0);
-      };
-      // Beside a quantiser, Δy of the same noise is the rounding flips the effect causes, each a
-      // whole step, which a test that did not know the noise cannot place: the noise dithers the
-      // quantiser, which then passes the effect's own Δy (from the records without the quantiser)
-      // in noise of variance σ² + q²/12.
-      Eigen::VectorXd d_refit = d;
-      double variance = c.noise_sigma * c.noise_sigma;
-      if (q > 0) {
-        std::vector<Effect> with = smooth;
-        with.push_back(c.effects[i]);
-        d_refit = noise_free(c.real, with, u) - noise_free(plant, smooth, u);
-        variance += q * q / 12;
-      }
+      const Eigen::VectorXd d_refit =
+          q > 0 ? Eigen::VectorXd(noise_free(c.real, with, u) - noise_free(plant, smooth, u)) : d;
       const Eigen::MatrixXd taken = RefitColumns(plant, !mismatch, smooth, u, segment, options.sample_time, noise_free);
       Eigen::MatrixXd refit(basis.rows(), basis.cols() + taken.cols());
       refit << basis, taken;
