@@ -233,12 +233,37 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
       const double se = std::sqrt((d - mean).square().sum() / std::max<double>(1, d.size() - 1) / d.size());
       if (mean <= 2 * se) lean = w;
     }
-    out.kept = true;
-    out.pair = *lean;
     if (lean != chosen)
       out.lean_note = std::string(EffectName(lean->fit.effects[1].kind)) + " preferred to " +
                       EffectName(chosen->fit.effects[1].kind) +
                       ": fewer parameters, validation residuals not significantly larger";
+    // Where the validation records cannot tell the second effect from another with no more
+    // parameters and the estimation records can, the estimation records decide (as for the
+    // singles, MaskWhatTheEstimationRecordsReject): a delay of 7.5 samples and an actuator lag
+    // after an input limit under a staircase, the lag 4.6 BIC ahead on validation, the delay
+    // 107 ahead in the LR on the estimation records (`gap bench --cases 52 --seed 7601 --offsets
+    // --combos 0.3 --pairs any --damping 0.02,0.3` case 9).
+    const CandidateWork* decided = lean;
+    EstimationAgainstValidation decided_by;
+    for (const CandidateWork* w : passing) {
+      if (w == lean || w->fit.parameters > lean->fit.parameters ||
+          !(w->fit.estimation_mse < lean->fit.estimation_mse))
+        continue;
+      const EstimationAgainstValidation t = CompareOnBothRecords(ctx, *lean, *w);
+      if (t.estimation_decides && t.z_est > decided_by.z_est) decided = w, decided_by = t;
+    }
+    if (decided != lean) {
+      char line[400];
+      std::snprintf(line, sizeof line,
+                    "%s preferred to %s: the validation records cannot tell the two apart (z = %.2f), the "
+                    "estimation records can (z = %.2f; threshold %.2f, automatic Newey–West lag)",
+                    EffectName(decided->fit.effects[1].kind), EffectName(lean->fit.effects[1].kind),
+                    decided_by.z_val, decided_by.z_est, decided_by.threshold);
+      out.lean_note += (out.lean_note.empty() ? "" : "; ") + std::string(line);
+      lean = decided;
+    }
+    out.kept = true;
+    out.pair = *lean;
   }
   std::string tried;
   for (const CandidateWork& w : pairs) {

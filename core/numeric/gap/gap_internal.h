@@ -337,6 +337,17 @@ void CountNuisance(const FitContext& ctx, CandidateWork& w);
 // was named). Such a single candidate is masked, with a note.
 constexpr double kIdentityShareOfTs = 0.01;
 void MaskLinearEffectsAtTheirIdentity(const FitContext& ctx, std::vector<CandidateWork>& work);
+// Two fits `a` (ranked ahead on validation) and `b` on both kinds of record, by the
+// Diebold–Mariano z with the automatic Newey–West lag (ValidationGainZ): `z_est`, b's gain over a
+// on the estimation records less the free gain of b's extra parameters and nuisance columns;
+// `z_val`, a's gain over b on validation less a's extra nuisance columns. `estimation_decides`
+// when z_est passes the one-sided threshold at `significance` and z_val does not: the
+// validation records cannot tell the two apart, the estimation records can, for b (ranking.cc).
+struct EstimationAgainstValidation {
+  double z_est = 0, z_val = 0, threshold = 0;
+  bool estimation_decides = false;
+};
+EstimationAgainstValidation CompareOnBothRecords(const FitContext& ctx, const CandidateWork& a, const CandidateWork& b);
 // The validation BIC ranks the candidates; where the validation records cannot tell the best two
 // eligible single candidates apart and the estimation records can, the estimation records
 // decide. The best (not none) is masked, with a note, when the runner-up (not none) fits the

@@ -291,6 +291,31 @@ void MaskLinearEffectsAtTheirIdentity(const FitContext& ctx, std::vector<Candida
   }
 }
 
+EstimationAgainstValidation CompareOnBothRecords(const FitContext& ctx, const CandidateWork& a, const CandidateWork& b) {
+  EstimationAgainstValidation t;
+  const GapOptions& options = *ctx.options;
+  t.threshold = NormalUpperQuantile(options.significance);
+  const Candidate ca(*ctx.g0, a.spec, ctx.scales, options.substeps), cb(*ctx.g0, b.spec, ctx.scales, options.substeps);
+  if (ca.Size() != a.x.size() || cb.Size() != b.x.size()) return t;
+  const std::vector<GapRecord>& estimation = *ctx.estimation;
+  const Eigen::VectorXd y = Stack(estimation, [](const GapRecord& r) { return r.y; });
+  const Eigen::VectorXd ya = Stack(estimation, [&](const GapRecord& r) { return ca.Predict(a.x, r); });
+  const Eigen::VectorXd yb = Stack(estimation, [&](const GapRecord& r) { return cb.Predict(b.x, r); });
+  if (!ya.allFinite() || !yb.allFinite()) return t;
+  // b's gain on the records it was fitted to, less what its extra parameters and nuisance
+  // columns take up there for free; a's gain on validation, less its extra nuisance columns.
+  const long extra_est = std::max<long>(0, (b.fit.parameters + b.fit.nuisance_estimation) -
+                                               (a.fit.parameters + a.fit.nuisance_estimation));
+  t.z_est = ValidationGainZ(
+      y, ya, yb, NuisanceGainBias(extra_est, b.fit.estimation_mse, ctx.n_est, b.fit.nuisance_estimation), true);
+  const long extra_val = std::max<long>(0, a.fit.nuisance_validation - b.fit.nuisance_validation);
+  t.z_val = ValidationGainZ(
+      ctx.y_val, b.y_val, a.y_val,
+      NuisanceGainBias(extra_val, a.fit.validation_mse, ctx.n_val, a.fit.nuisance_validation), true);
+  t.estimation_decides = t.z_est > t.threshold && !(t.z_val > t.threshold);
+  return t;
+}
+
 void MaskWhatTheEstimationRecordsReject(const FitContext& ctx, std::vector<CandidateWork>& work, double floor_mse) {
   const GapOptions& options = *ctx.options;
   CandidateWork *a = nullptr, *b = nullptr;  // the best two eligible singles by validation BIC
@@ -308,25 +333,8 @@ void MaskWhatTheEstimationRecordsReject(const FitContext& ctx, std::vector<Candi
   if (!a || !b || a->fit.effect.kind == EffectKind::kNone || b->fit.effect.kind == EffectKind::kNone ||
       !(b->fit.estimation_mse < a->fit.estimation_mse) || !(b->fit.estimation_mse <= floor_mse))
     return;
-  const Candidate ca(*ctx.g0, a->spec, ctx.scales, options.substeps), cb(*ctx.g0, b->spec, ctx.scales, options.substeps);
-  if (ca.Size() != a->x.size() || cb.Size() != b->x.size()) return;
-  const std::vector<GapRecord>& estimation = *ctx.estimation;
-  const Eigen::VectorXd y = Stack(estimation, [](const GapRecord& r) { return r.y; });
-  const Eigen::VectorXd ya = Stack(estimation, [&](const GapRecord& r) { return ca.Predict(a->x, r); });
-  const Eigen::VectorXd yb = Stack(estimation, [&](const GapRecord& r) { return cb.Predict(b->x, r); });
-  if (!ya.allFinite() || !yb.allFinite()) return;
-  // b's gain on the records it was fitted to, less what its extra parameters and nuisance
-  // columns take up there for free; a's gain on validation, less its extra nuisance columns.
-  const long extra_est = std::max<long>(0, (b->fit.parameters + b->fit.nuisance_estimation) -
-                                               (a->fit.parameters + a->fit.nuisance_estimation));
-  const double z_est = ValidationGainZ(
-      y, ya, yb, NuisanceGainBias(extra_est, b->fit.estimation_mse, ctx.n_est, b->fit.nuisance_estimation), true);
-  const long extra_val = std::max<long>(0, a->fit.nuisance_validation - b->fit.nuisance_validation);
-  const double z_val = ValidationGainZ(
-      ctx.y_val, b->y_val, a->y_val,
-      NuisanceGainBias(extra_val, a->fit.validation_mse, ctx.n_val, a->fit.nuisance_validation), true);
-  const double threshold = NormalUpperQuantile(options.significance);
-  if (!(z_est > threshold) || z_val > threshold) return;
+  const EstimationAgainstValidation t = CompareOnBothRecords(ctx, *a, *b);
+  if (!t.estimation_decides) return;
   a->masked = true;
   char line[700];
   std::snprintf(line, sizeof line,
@@ -334,7 +342,7 @@ void MaskWhatTheEstimationRecordsReject(const FitContext& ctx, std::vector<Candi
                 "this fit's validation gain over it is not significant (z = %.2f; both with the automatic "
                 "Newey–West lag, threshold %.2f): the validation records cannot tell the two apart, the "
                 "estimation records can (%s is within the noise floor there, %.4g)",
-                EffectName(b->fit.effect.kind), b->fit.estimation_mse, a->fit.estimation_mse, z_est, z_val, threshold,
+                EffectName(b->fit.effect.kind), b->fit.estimation_mse, a->fit.estimation_mse, t.z_est, t.z_val, t.threshold,
                 EffectName(b->fit.effect.kind), floor_mse);
   a->fit.note = line;
 }

@@ -1267,6 +1267,42 @@ TEST(GapPairTest, ADelayRivalledByADampedModeIsStillPairedWithTheLimit) {
   ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.02);
 }
 
+// `idrig gap bench --cases 52 --seed 7601 --offsets --combos 0.3 --pairs any --damping 0.02,0.3`,
+// case `index`: a share of pairs from every pair, on lightly damped plants.
+GapCase LightlyDampedPairCase(int index, const std::vector<EffectKind>& expected_truth) {
+  const std::vector<EffectKind> truth = BenchCaseTruth(index, 0.3, true);
+  EXPECT_EQ(truth, expected_truth) << "the bench's pair " << index << " moved";
+  GapCaseOptions options;
+  options.offsets = true;
+  options.zeta_min = 0.02;
+  options.zeta_max = 0.3;
+  return SeededBenchCase(7601, index, truth, options);
+}
+
+TEST(GapPairTest, ASecondEffectThatValidationCannotTellFromItsKinIsChosenOnTheEstimationRecords) {
+  // Case 9: a delay of 7.5 samples beside an input limit, under a staircase. After the limit, a
+  // lag and the delay as its second pass alike; the lag's pair was 4.6 BIC ahead on validation
+  // (their difference there z 0.07), the delay's 107 ahead in the LR on the estimation records,
+  // and the lag was named.
+  const GapCase c = LightlyDampedPairCase(9, {EffectKind::kTimeDelay, EffectKind::kInputSaturation});
+  const GapReport report = DiagnoseAndPrint(c, "delay + input limit, lightly damped");
+  EXPECT_EQ(NamedSorted(report.verdict), (std::vector<std::string>{"input_saturation", "time_delay"}));
+  EXPECT_NE(LastNoteWith(report, "time_delay preferred to actuator_lag: the validation records cannot tell"), "");
+  ExpectParameterNear(report.verdict, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.1);
+}
+
+TEST(GapPairTest, APairFromALagIsCheckedAgainstThePairFromItsKinTheDelay) {
+  // Case 26: a delay of two samples beside an output clip on a plant with ζ 0.05. Alone the lag
+  // ranked 22 BIC ahead of the delay (neither explains the clip); the lag's pair with the clip
+  // ended the search, and lag + clip was named. The delay's pair with the clip is 423 BIC
+  // ahead of it on validation.
+  const GapCase c = LightlyDampedPairCase(26, {EffectKind::kTimeDelay, EffectKind::kOutputSaturation});
+  const GapReport report = DiagnoseAndPrint(c, "delay + output clip, lightly damped");
+  EXPECT_EQ(NamedSorted(report.verdict), (std::vector<std::string>{"output_saturation", "time_delay"}));
+  EXPECT_NE(LastNoteWith(report, "it replaces actuator_lag with output_saturation"), "");
+  ExpectParameterNear(report.verdict, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.1);
+}
+
 TEST(GapPairTest, ASecondEffectUnderALooseFloorIsSearchedWhenTheResidualFollowsTheInput) {
   // `--pairs any --seed 978 --ts 0.05 --excitation levels`, case 36: a dead zone with a cubic
   // spring, sampled coarsely. The one-step ARX predictor of the floor reads σ 1.6 times the
