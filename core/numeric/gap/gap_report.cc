@@ -226,6 +226,34 @@ bool gap_detail::ResidualFollowsInput(const std::vector<GapRecord>& validation, 
   }
 }
 
+bool gap_detail::ResidualFollowsInputThroughMaps(const FitContext& ctx, const CandidateWork& w,
+                                                 const Eigen::VectorXd& residual, std::string* note) {
+  if (ctx.nuisance.segment > 0) return false;
+  const Candidate c(*ctx.g0, w.spec, ctx.scales, ctx.options->substeps);
+  if (c.Size() != w.x.size()) return false;
+  std::vector<GapRecord> through;
+  for (const GapRecord& r : *ctx.validation) {
+    std::vector<Effect> maps;
+    const Eigen::VectorXd plant_output = c.Simulate(w.x, r, &maps);
+    if (maps.empty() || !plant_output.allFinite()) return false;
+    GapRecord seen = r;
+    for (long k = 0; k < r.u.size(); ++k) {
+      double y = plant_output(k), slope = 1.0;
+      for (const Effect& m : maps) {
+        double s = 1.0;
+        y = OutputMap(m, y, &s);
+        slope *= s;
+      }
+      seen.u(k) = slope * r.u(k);
+    }
+    through.push_back(std::move(seen));
+  }
+  std::string line;
+  const bool follows = ResidualFollowsInput(through, residual, &line);
+  *note = "through the output maps' slope at the plant's output, " + line;
+  return follows;
+}
+
 void gap_detail::AdoptCandidate(const CandidateFit& c, GapVerdict& v) {
   v.effects = c.effects;
   v.effects_std = c.effects_std;
@@ -839,7 +867,8 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
                         first.c_str(), w.fit.validation_mse, floor.sigma * floor.sigma, floor.method.c_str(),
                         pooled_mse, pooled_limit);
           report.notes.push_back(line);
-        } else if (ResidualFollowsInput(validation, ctx.y_val - w.y_val, &input_note)) {
+        } else if (ResidualFollowsInput(validation, ctx.y_val - w.y_val, &input_note) ||
+                   ResidualFollowsInputThroughMaps(ctx, w, ctx.y_val - w.y_val, &input_note)) {
           report.notes.push_back(first + ": searched though its validation MSE is within the noise floor, since what it "
                                          "leaves follows the input (" + input_note + ")");
         } else if (const double own = ResidualFloor(ctx, w, floor);
