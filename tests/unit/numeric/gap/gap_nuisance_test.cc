@@ -1325,7 +1325,7 @@ TEST(GapPairTest, BehindAnAbsoluteSensorWhatALagLeavesFollowsTheInputThroughTheF
   const GapReport report = DiagnoseAndPrint(c, "lag + |y| sensor, two-mass, 20 dB");
   EXPECT_EQ(NamedSorted(report.verdict), (std::vector<std::string>{"actuator_lag", "sensor_nonlinearity"}));
   EXPECT_NE(LastNoteWith(report, "through the output maps' slope at the plant's output"), "");
-  ExpectParameterNear(report.verdict, EffectKind::kActuatorLag, 0, c.effects[0].params[0], 0.2);
+  ExpectParameterNear(report.verdict, EffectKind::kActuatorLag, 0, c.effects[0].params[0], 0.3);  // 0.136 ± 0.016
 }
 
 TEST(GapPairTest, ALeanerSecondEffectGivesWayWhereTheEstimationRecordsPreferTheRicherOne) {
