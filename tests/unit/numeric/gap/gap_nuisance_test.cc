@@ -1267,16 +1267,35 @@ TEST(GapPairTest, ADelayRivalledByADampedModeIsStillPairedWithTheLimit) {
   ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.02);
 }
 
+// `idrig gap bench --seed SEED --offsets --combos COMBOS --pairs any` with the rest of `options`,
+// case `index`, whose truth must be `expected_truth`.
+GapCase AnyPairBenchCase(uint64_t seed, int index, double combos, const std::vector<EffectKind>& expected_truth,
+                         GapCaseOptions options) {
+  const std::vector<EffectKind> truth = BenchCaseTruth(index, combos, true);
+  EXPECT_EQ(truth, expected_truth) << "the bench's pair " << index << " moved";
+  options.offsets = true;
+  return SeededBenchCase(seed, index, truth, options);
+}
+
 // `idrig gap bench --cases 52 --seed 7601 --offsets --combos 0.3 --pairs any --damping 0.02,0.3`,
 // case `index`: a share of pairs from every pair, on lightly damped plants.
 GapCase LightlyDampedPairCase(int index, const std::vector<EffectKind>& expected_truth) {
-  const std::vector<EffectKind> truth = BenchCaseTruth(index, 0.3, true);
-  EXPECT_EQ(truth, expected_truth) << "the bench's pair " << index << " moved";
   GapCaseOptions options;
-  options.offsets = true;
   options.zeta_min = 0.02;
   options.zeta_max = 0.3;
-  return SeededBenchCase(7601, index, truth, options);
+  return AnyPairBenchCase(7601, index, 0.3, expected_truth, options);
+}
+
+// The diagnosis of pair case `c` names both its effects (`named`, sorted), a note holds `note`
+// (unless empty), and the first effect's first parameter is within `share` of the truth's.
+void ExpectPairNamed(const GapCase& c, const char* what, const std::vector<std::string>& named,
+                     const std::string& note, double share) {
+  const GapReport report = DiagnoseAndPrint(c, what);
+  EXPECT_EQ(NamedSorted(report.verdict), named);
+  if (!note.empty()) {
+    EXPECT_NE(LastNoteWith(report, note), "") << note;
+  }
+  ExpectParameterNear(report.verdict, c.effects[0].kind, 0, c.effects[0].params[0], share);
 }
 
 TEST(GapPairTest, ASecondEffectThatValidationCannotTellFromItsKinIsChosenOnTheEstimationRecords) {
@@ -1284,11 +1303,9 @@ TEST(GapPairTest, ASecondEffectThatValidationCannotTellFromItsKinIsChosenOnTheEs
   // lag and the delay as its second pass alike; the lag's pair was 4.6 BIC ahead on validation
   // (their difference there z 0.07), the delay's 107 ahead in the LR on the estimation records,
   // and the lag was named.
-  const GapCase c = LightlyDampedPairCase(9, {EffectKind::kTimeDelay, EffectKind::kInputSaturation});
-  const GapReport report = DiagnoseAndPrint(c, "delay + input limit, lightly damped");
-  EXPECT_EQ(NamedSorted(report.verdict), (std::vector<std::string>{"input_saturation", "time_delay"}));
-  EXPECT_NE(LastNoteWith(report, "time_delay preferred to actuator_lag: the validation records cannot tell"), "");
-  ExpectParameterNear(report.verdict, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.1);
+  ExpectPairNamed(LightlyDampedPairCase(9, {EffectKind::kTimeDelay, EffectKind::kInputSaturation}),
+                  "delay + input limit, lightly damped", {"input_saturation", "time_delay"},
+                  "time_delay preferred to actuator_lag: the validation records cannot tell", 0.1);
 }
 
 TEST(GapPairTest, APairFromALagIsCheckedAgainstThePairFromItsKinTheDelay) {
@@ -1296,23 +1313,18 @@ TEST(GapPairTest, APairFromALagIsCheckedAgainstThePairFromItsKinTheDelay) {
   // ranked 22 BIC ahead of the delay (neither explains the clip); the lag's pair with the clip
   // ended the search, and lag + clip was named. The delay's pair with the clip is 423 BIC
   // ahead of it on validation.
-  const GapCase c = LightlyDampedPairCase(26, {EffectKind::kTimeDelay, EffectKind::kOutputSaturation});
-  const GapReport report = DiagnoseAndPrint(c, "delay + output clip, lightly damped");
-  EXPECT_EQ(NamedSorted(report.verdict), (std::vector<std::string>{"output_saturation", "time_delay"}));
-  EXPECT_NE(LastNoteWith(report, "it replaces actuator_lag with output_saturation"), "");
-  ExpectParameterNear(report.verdict, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.1);
+  ExpectPairNamed(LightlyDampedPairCase(26, {EffectKind::kTimeDelay, EffectKind::kOutputSaturation}),
+                  "delay + output clip, lightly damped", {"output_saturation", "time_delay"},
+                  "it replaces actuator_lag with output_saturation", 0.1);
 }
 
 // `idrig gap bench --cases 52 --seed 7602 --offsets --combos 0.5 --pairs any --plants two-mass
 // --snr 20`, case `index`.
 GapCase TwoMassPairCase(int index, const std::vector<EffectKind>& expected_truth) {
-  const std::vector<EffectKind> truth = BenchCaseTruth(index, 0.5, true);
-  EXPECT_EQ(truth, expected_truth) << "the bench's pair " << index << " moved";
   GapCaseOptions options;
-  options.offsets = true;
   options.plants = "two-mass";
   options.snr_db = 20;
-  return SeededBenchCase(7602, index, truth, options);
+  return AnyPairBenchCase(7602, index, 0.5, expected_truth, options);
 }
 
 TEST(GapPairTest, BehindAnAbsoluteSensorWhatALagLeavesFollowsTheInputThroughTheFold) {
@@ -1321,21 +1333,17 @@ TEST(GapPairTest, BehindAnAbsoluteSensorWhatALagLeavesFollowsTheInputThroughTheF
   // 0.000344), and what it left did not follow the input in the linear test (N·R² 36.6 against
   // 49.2): behind the fold a lag's error flips sign with the plant's output. Against u times the
   // fold's slope sign(y) it does, and the pair is searched.
-  const GapCase c = TwoMassPairCase(35, {EffectKind::kActuatorLag, EffectKind::kSensorNonlinearity});
-  const GapReport report = DiagnoseAndPrint(c, "lag + |y| sensor, two-mass, 20 dB");
-  EXPECT_EQ(NamedSorted(report.verdict), (std::vector<std::string>{"actuator_lag", "sensor_nonlinearity"}));
-  EXPECT_NE(LastNoteWith(report, "through the output maps' slope at the plant's output"), "");
-  ExpectParameterNear(report.verdict, EffectKind::kActuatorLag, 0, c.effects[0].params[0], 0.3);  // 0.136 ± 0.016
+  ExpectPairNamed(TwoMassPairCase(35, {EffectKind::kActuatorLag, EffectKind::kSensorNonlinearity}),
+                  "lag + |y| sensor, two-mass, 20 dB", {"actuator_lag", "sensor_nonlinearity"},
+                  "through the output maps' slope at the plant's output", 0.3);  // T 0.136 ± 0.016 s
 }
 
 TEST(GapPairTest, ALeanerSecondEffectGivesWayWhereTheEstimationRecordsPreferTheRicherOne) {
   // Case 49: a mode of ω 46 rad/s, ζ 0.15 beside an output clip. As the clip's second a delay
   // (one parameter) simulated validation within two standard errors of the mode and was
   // preferred, though the estimation records preferred the mode (LR 902 against 876).
-  const GapCase c = TwoMassPairCase(49, {EffectKind::kUnmodelledResonance, EffectKind::kOutputSaturation});
-  const GapReport report = DiagnoseAndPrint(c, "resonance + output clip, two-mass, 20 dB");
-  EXPECT_EQ(NamedSorted(report.verdict), (std::vector<std::string>{"output_saturation", "unmodelled_resonance"}));
-  ExpectParameterNear(report.verdict, EffectKind::kUnmodelledResonance, 0, c.effects[0].params[0], 0.1);
+  ExpectPairNamed(TwoMassPairCase(49, {EffectKind::kUnmodelledResonance, EffectKind::kOutputSaturation}),
+                  "resonance + output clip, two-mass, 20 dB", {"output_saturation", "unmodelled_resonance"}, "", 0.1);
 }
 
 TEST(GapPairTest, ASecondEffectUnderALooseFloorIsSearchedWhenTheResidualFollowsTheInput) {
