@@ -228,7 +228,10 @@ bool gap_detail::ResidualFollowsInput(const std::vector<GapRecord>& validation, 
 
 bool gap_detail::ResidualFollowsInputThroughMaps(const FitContext& ctx, const CandidateWork& w,
                                                  const Eigen::VectorXd& residual, std::string* note) {
-  if (ctx.nuisance.segment > 0) return false;
+  const bool has_map = std::any_of(w.spec.kinds.begin(), w.spec.kinds.end(), [](EffectKind k) {
+    return k == EffectKind::kOutputSaturation || k == EffectKind::kSensorNonlinearity;
+  });
+  if (!has_map || ctx.nuisance.segment > 0) return false;
   const Candidate c(*ctx.g0, w.spec, ctx.scales, ctx.options->substeps);
   if (c.Size() != w.x.size()) return false;
   std::vector<GapRecord> through;
