@@ -51,11 +51,14 @@ void WriteCase(const GapCase& c, const std::string& dir, int index) {
   truth["real"] = ModelToJson(c.real);
   truth["noise_sigma"] = c.noise_sigma;
   truth["excitation"] = c.excitation;
-  truth["visibility"] = nlohmann::json::array();  // GapCase::visibility; +inf (none) as null
-  for (double v : c.visibility) truth["visibility"].push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json());
-  truth["visibility_refit"] = nlohmann::json::array();  // GapCase::visibility_refit; +inf (none) as null
-  for (double v : c.visibility_refit)
-    truth["visibility_refit"].push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json());
+  // GapCase::visibility and visibility_refit; +inf (none) as null.
+  const auto finite_or_null = [](const std::vector<double>& values) {
+    nlohmann::json out = nlohmann::json::array();
+    for (double v : values) out.push_back(std::isfinite(v) ? nlohmann::json(v) : nlohmann::json());
+    return out;
+  };
+  truth["visibility"] = finite_or_null(c.visibility);
+  truth["visibility_refit"] = finite_or_null(c.visibility_refit);
   std::ofstream(base + "-truth.json") << truth.dump(2) << "\n";
 }
 

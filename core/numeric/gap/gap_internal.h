@@ -224,17 +224,6 @@ inline bool HasDelayLine(double delay_s, double ts) { return std::floor(delay_s 
 bool ResidualFollowsInput(const std::vector<GapRecord>& validation, const Eigen::VectorXd& residual,
                           std::string* note);
 
-// The same test on what candidate `w` leaves, with the input seen through its output maps (a
-// clip, a sensor map): u_k times the maps' slope at the plant's output (Candidate::Simulate
-// without the maps). Behind a map m a missing linear effect ΔG leaves m'(y)·(ΔG u) to first
-// order — linear in m'(y)·u, not in u (behind |y| its sign flips with the plant's output). False
-// without output maps, and under multiple shooting (the plant's output from rest is not the
-// segments' there).
-struct FitContext;
-struct CandidateWork;
-bool ResidualFollowsInputThroughMaps(const FitContext& ctx, const CandidateWork& w, const Eigen::VectorXd& residual,
-                                     std::string* note);
-
 double Correlation(const Eigen::VectorXd& a, const Eigen::VectorXd& b);
 // Validation BIC with the nuisance fitted on the validation records counted: N_val ln V̂ +
 // k ln N_est, V̂ = mse·N_val/(N_val − nuisance_val) the unbiased residual variance.
@@ -348,6 +337,15 @@ void CountNuisance(const FitContext& ctx, CandidateWork& w);
 // was named). Such a single candidate is masked, with a note.
 constexpr double kIdentityShareOfTs = 0.01;
 void MaskLinearEffectsAtTheirIdentity(const FitContext& ctx, std::vector<CandidateWork>& work);
+// ResidualFollowsInput on what candidate `w` leaves, with the input seen through its output
+// maps (a clip, a sensor map): u_k times the maps' slope at the plant's output
+// (Candidate::Simulate without the maps). Behind a map m a missing linear effect ΔG leaves m'(y)·(ΔG u) to first
+// order — linear in m'(y)·u, not in u (behind |y| its sign flips with the plant's output). False
+// without output maps, and under multiple shooting (the plant's output from rest is not the
+// segments' there).
+bool ResidualFollowsInputThroughMaps(const FitContext& ctx, const CandidateWork& w, const Eigen::VectorXd& residual,
+                                     std::string* note);
+
 // Two fits `a` (ranked ahead on validation) and `b` on both kinds of record, by the
 // Diebold–Mariano z with the automatic Newey–West lag (ValidationGainZ): `z_est`, b's gain over a
 // on the estimation records less the free gain of b's extra parameters and nuisance columns;

@@ -861,6 +861,10 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
         const double pooled_limit = floor.sigma * floor.sigma * SampleVarianceTolerance(n_est + n_val);
         std::string input_note;
         const std::string first = std::string("second effect after ") + EffectName(w.fit.effects.front().kind);
+        const auto follows_input = [&first](const std::string& test) {
+          return first + ": searched though its validation MSE is within the noise floor, since what it leaves "
+                         "follows the input (" + test + ")";
+        };
         if (!(pooled_mse <= pooled_limit)) {
           char line[320];
           std::snprintf(line, sizeof line,
@@ -871,8 +875,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
                         pooled_mse, pooled_limit);
           report.notes.push_back(line);
         } else if (ResidualFollowsInput(validation, ctx.y_val - w.y_val, &input_note)) {
-          report.notes.push_back(first + ": searched though its validation MSE is within the noise floor, since what it "
-                                         "leaves follows the input (" + input_note + ")");
+          report.notes.push_back(follows_input(input_note));
         } else if (const double own = ResidualFloor(ctx, w, floor);
                    own > 0 && !(w.fit.validation_mse <= own * SampleVarianceTolerance(n_val))) {
           char line[320];
@@ -886,8 +889,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
           // (`gap bench --cases 52 --seed 7602 --offsets --combos 0.5 --pairs any --plants two-mass
           // --snr 20` case 35: a lag before an |y| sensor, N·R² 36.6 against 49.2 in the linear test,
           // 62.0 through the fold's slope).
-          report.notes.push_back(first + ": searched though its validation MSE is within the noise floor, since what it "
-                                         "leaves follows the input (" + input_note + ")");
+          report.notes.push_back(follows_input(input_note));
         } else if (options.second_effect_at_floor && ctx.nuisance.segment > 0 &&
                    (options.fixed_segment >= 0 || 2 * ctx.nuisance.segment < LongestScored(estimation))) {
           char line[400];
