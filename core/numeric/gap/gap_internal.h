@@ -433,7 +433,7 @@ bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWo
 // limits, or one), or over widths; physical units. Empty for the other effects.
 std::vector<std::vector<double>> GridStarts(EffectKind kind, const Scales& s);
 // Of every prefix times every start of the last block of `spec`, the `keep` starting points
-// with the lowest estimation MSE (one simulation each, no fit).
+// with the lowest estimation MSE (one simulation each, no fit), no two with the same MSE.
 std::vector<Eigen::VectorXd> BestStartPoints(const FitContext& ctx, const CandidateSpec& spec,
                                              const std::vector<Eigen::VectorXd>& prefixes,
                                              const std::vector<std::vector<double>>& starts, size_t keep);

@@ -1346,6 +1346,26 @@ TEST(GapPairTest, ALeanerSecondEffectGivesWayWhereTheEstimationRecordsPreferTheR
                   "resonance + output clip, two-mass, 20 dB", {"output_saturation", "unmodelled_resonance"}, "", 0.1);
 }
 
+TEST(GapPairTest, AnInputLimitBesideFrictionIsFoundWhereFrictionAloneRanItsActuatorOffsetToTheBound) {
+  // `idrig gap bench --cases 52 --seed 7704 --offsets --combos 0.3 --ts 0.002 --samples 6000`
+  // (pairs that occur together on rigs, sampled fast), case 26: friction beside an input limit
+  // whose upper side clips the staircase (an actuator offset of 0.38). Friction alone ran its
+  // actuator offset to the bound of ±max|u| (2.64), where its tanh has no slope left; every start
+  // of the limit from there clipped nothing or did worse, the three best alike did not move, and
+  // a y², y³ sensor map was named as the second effect at six times the noise floor.
+  GapCaseOptions options;
+  options.sample_time = 0.002;
+  options.samples = 6000;
+  options.offsets = true;
+  const std::vector<EffectKind> truth = BenchCaseTruth(26, 0.3);
+  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kCoulombFriction, EffectKind::kInputSaturation}))
+      << "the bench's pair 26 moved";
+  const GapCase c = SeededBenchCase(7704, 26, truth, options);
+  const GapVerdict v = DiagnoseTheTruthAtTheFloor(c, "friction + input limit, Ts 0.002 s");
+  ExpectParameterNear(v, EffectKind::kCoulombFriction, 0, c.effects[0].params[0], 0.05);
+  ExpectParameterNear(v, EffectKind::kInputSaturation, 1, c.effects[1].params[1], 0.05);
+}
+
 TEST(GapPairTest, ASecondEffectUnderALooseFloorIsSearchedWhenTheResidualFollowsTheInput) {
   // `--pairs any --seed 978 --ts 0.05 --excitation levels`, case 36: a dead zone with a cubic
   // spring, sampled coarsely. The one-step ARX predictor of the floor reads σ 1.6 times the
