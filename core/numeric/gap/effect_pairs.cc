@@ -335,10 +335,21 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
 }
 
 bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWork& single, std::string& note,
-                   bool* main_second, const CandidateWork* quantiser_alone) {
+                   bool* main_second, const std::vector<CandidateWork>& singles) {
   const GapOptions& options = *ctx.options;
   *main_second = false;
   if (pair.fit.effects.size() != 2 || pair.spec.kinds.size() != 2) return false;
+  // The ranking's own fit of the pair's effect i alone (in the pair's variant of it, with
+  // `same_variant`).
+  const auto single_fit = [&](size_t i, bool same_variant) -> const CandidateWork* {
+    for (const CandidateWork& w : singles)
+      if (w.fit.effects.size() == 1 && w.fit.effects.front().kind == pair.spec.kinds[i] &&
+          (!same_variant || (w.spec.fixed.size() == 1 && w.spec.fixed.front() == pair.spec.fixed[i])))
+        return &w;
+    return nullptr;
+  };
+  const CandidateWork* quantiser_alone =
+      pair.spec.kinds[1] == EffectKind::kOutputQuantization ? single_fit(1, false) : nullptr;
   if (pair.spec.kinds[1] == EffectKind::kOutputQuantization) {
     // Reached from the other effect, with the quantiser as its second: the other effect must
     // also pass as a second after the quantiser alone (its single fit, placed from the lattice),
@@ -391,15 +402,26 @@ bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWo
   }
   if (!(alone[1].fit.bic < alone[0].fit.bic)) return false;  // the first is the main effect
   // The pair came from its lesser effect: the lesser one as a second after the main one, by
-  // the forward search's rules, against the main one as refitted from the pair.
+  // the forward search's rules, against the main one alone as refitted from the pair, or as the
+  // ranking fitted it where that fits the estimation records better: from the pair's fit the
+  // refit can stay in the pair's basin (an output clip behind an |y| sensor, the plant's sign
+  // flipped under the fold; alone from there the clip was 1998 BIC behind the pair, as the
+  // ranking fitted it 5 — `gap bench --cases 52 --seed 7706 --offsets --combos 0.5 --plants zeros
+  // --noise-pole 0.9` case 20, a clip alone named with an |y| sensor that never folds).
   const EffectKind main = pair.spec.kinds[1], lesser = pair.spec.kinds[0];
-  const SecondEffectTest test = TestSecondEffect(ctx, alone[1], pair);
-  if (alone[1].fit.eligible &&
-      !(test.Passes(options) && pair.fit.bic < alone[1].fit.bic - options.ambiguity_bic)) {
-    single = alone[1];
-    char why[200];
-    std::snprintf(why, sizeof why, " (LR %.1f, threshold %.1f; signature %.2f, gain z %.1f)", test.lr,
-                  test.threshold, test.signature, test.gain_z);
+  const CandidateWork* ranked = single_fit(1, true);
+  const CandidateWork& main_alone =
+      ranked && ranked->fit.eligible && ranked->fit.estimation_mse < alone[1].fit.estimation_mse ? *ranked : alone[1];
+  const SecondEffectTest test = TestSecondEffect(ctx, main_alone, pair);
+  if (main_alone.fit.eligible &&
+      !(test.Passes(options) && pair.fit.bic < main_alone.fit.bic - options.ambiguity_bic)) {
+    single = main_alone;
+    char why[300];
+    std::snprintf(why, sizeof why, " (LR %.1f, threshold %.1f; signature %.2f, gain z %.1f%s)", test.lr,
+                  test.threshold, test.signature, test.gain_z,
+                  &main_alone == ranked ? "; against its single fit in the ranking, which fits the estimation records "
+                                          "better than its refit from the pair"
+                                        : "");
     note += std::string(": ") + EffectName(main) + " is the main effect, and " + EffectName(lesser) +
             " does not pass as a second effect after it" + why + "; the pair is dropped";
     return true;

@@ -421,13 +421,14 @@ struct PairSearch {
 // The main effect of the pair is the one that does better alone (the other costs less when
 // removed). When the pair was reached from its lesser effect, the lesser one must pass the
 // rules of a second effect (significant LR, signature, validation BIC below by the ambiguity
-// margin) against the main one alone as refitted from the pair; if it does not, the pair is
-// dropped for the main effect alone (a route through the lesser effect must not let it past
+// margin) against the main one alone as refitted from the pair, or as `singles` (the ranking's
+// single fits) has it where that fits the estimation records better; if it does not, the pair
+// is dropped for the main effect alone (a route through the lesser effect must not let it past
 // the rules). Otherwise `main_second` is set: report the pair with the main effect first.
 // A pair reached from its other effect with the quantiser second: that effect must pass as a
-// second after `quantiser_alone` (the quantiser's single fit; none: the pair stands).
+// second after the quantiser's single fit in `singles` (none: the pair stands).
 bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWork& single, std::string& note,
-                   bool* main_second, const CandidateWork* quantiser_alone);
+                   bool* main_second, const std::vector<CandidateWork>& singles);
 // Grid starts of the piecewise effects (limits, dead zone, backlash, friction), whose cost has
 // no gradient where no sample reaches the break: a coarse grid over the tails of u or y (both
 // limits, or one), or over widths; physical units. Empty for the other effects.

@@ -1002,12 +1002,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
               (EffectName(c.effects[0].kind) == v.tied[1] && EffectName(c.effects[1].kind) == v.tied[0]));
     };
     const bool settles = !tie || (best.kept && holds_both(best.pair.fit));
-    const auto quantiser = std::find_if(work.begin(), work.end(), [](const CandidateWork& w) {
-      return w.fit.effects.size() == 1 && w.fit.effects.front().kind == EffectKind::kOutputQuantization;
-    });
-    const bool pruned = best.kept && settles &&
-                        PruneToSingle(ctx, best.pair, single, prune_note, &main_second,
-                                      quantiser == work.end() ? nullptr : &*quantiser);
+    const bool pruned = best.kept && settles && PruneToSingle(ctx, best.pair, single, prune_note, &main_second, work);
     if (best.kept && !settles) {
       report.notes.push_back("the tie between " + v.tied[0] + " and " + v.tied[1] + " stands: the best pair, " +
                              EffectName(best.pair.fit.effects[0].kind) + " with " +

@@ -1372,6 +1372,29 @@ TEST(GapPairTest, AnInputLimitBesideFrictionIsFoundWhereFrictionAloneRanItsActua
   ExpectParameterNear(v, EffectKind::kInputSaturation, 1, c.effects[1].params[1], 0.05);
 }
 
+TEST(GapPairTest, ThePairsMainEffectAloneIsTheRankingsFitWhereItsRefitFromThePairStaysInThePairsBasin) {
+  // `idrig gap bench --cases 52 --seed 7706 --offsets --combos 0.5 --plants zeros --noise-pole
+  // 0.9`, case 20: an output clip alone, on a third-order plant with a zero, under strongly
+  // coloured noise. From an |y| sensor as the first effect the clip passed as its second, and the
+  // pair was 5 BIC ahead of the clip alone. The backward check refitted the clip alone from the
+  // pair's fit (the plant's sign flipped under the fold) to 1998 BIC behind the pair, the |y|
+  // sensor passed as a second against that, and clip + |y| was named — an |y| that never folds.
+  // Against the clip as the ranking fitted it, the sensor does not pass.
+  GapCaseOptions options;
+  options.offsets = true;
+  options.plants = "zeros";
+  options.noise_pole = 0.9;
+  const std::vector<EffectKind> truth = BenchCaseTruth(20, 0.5);
+  ASSERT_EQ(truth, std::vector<EffectKind>{EffectKind::kOutputSaturation}) << "the bench's case 20 moved";
+  const GapCase c = SeededBenchCase(7706, 20, truth, options);
+  const GapReport report = DiagnoseAndPrint(c, "output clip, zeros, noise pole 0.9");
+  EXPECT_EQ(NamedSorted(report.verdict), std::vector<std::string>{"output_saturation"});
+  const std::string backward = LastNoteWith(report, "backward check");
+  if (!backward.empty()) {
+    EXPECT_NE(backward.find("does not pass as a second effect after it"), std::string::npos) << backward;
+  }
+}
+
 TEST(GapPairTest, ASecondEffectUnderALooseFloorIsSearchedWhenTheResidualFollowsTheInput) {
   // `--pairs any --seed 978 --ts 0.05 --excitation levels`, case 36: a dead zone with a cubic
   // spring, sampled coarsely. The one-step ARX predictor of the floor reads σ 1.6 times the
