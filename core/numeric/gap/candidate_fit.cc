@@ -1086,8 +1086,9 @@ std::vector<Eigen::VectorXd> BestStartPoints(const FitContext& ctx, const Candid
   std::stable_sort(scored.begin(), scored.end());
   // Points with the same cost are taken once: a limit or a width that no sample reaches leaves
   // the prediction as the prefix had it, whatever its value, and gives the fit no slope to
-  // follow; three such starts would be one fit three times (effect_pairs.cc: an input limit after friction,
-  // `gap bench --cases 52 --seed 7704 --offsets --combos 0.3 --ts 0.002 --samples 6000` case 26).
+  // follow; three such starts would be one fit three times (effect_pairs.cc: an input limit
+  // after friction, `gap bench --cases 52 --seed 7704 --offsets --combos 0.3 --ts 0.002
+  // --samples 6000` case 26).
   std::vector<Eigen::VectorXd> best;
   double last = NAN;
   for (size_t i = 0; i < scored.size() && best.size() < keep; ++i) {

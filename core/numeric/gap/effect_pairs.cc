@@ -162,18 +162,15 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
       if (other_variant) prefixes.push_back(Eigen::VectorXd::Zero(prefix.size()));
       // Where the second acts on the actuator's input (u + du: a limit, a dead zone, a backlash,
       // friction's break-away force), the first's du has bent to stand in for it, up to the bound
-      // of its tanh, where it has no slope left to come back: both prefixes also with du at 0
+      // of its tanh, where it has no slope left to come back: the first's fit also with du at 0
       // (`gap bench --cases 52 --seed 7704 --offsets --combos 0.3 --ts 0.002 --samples 6000`
       // case 26: friction beside an input limit, friction alone with du +2.64 for a true 0.38;
       // every start of the limit clipped nothing there or made it worse, and the limit was not
       // found).
       if (first.spec.input_offset && !other_variant &&
           (IsInputMap(k2) || k2 == EffectKind::kCoulombFriction)) {
-        const int du = base.PlantParams();
-        for (Eigen::VectorXd at_zero : {prefix, from_g0}) {
-          at_zero(du) = 0.0;
-          prefixes.push_back(std::move(at_zero));
-        }
+        prefixes.push_back(prefix);
+        prefixes.back()(base.PlantParams()) = 0.0;
       }
       const auto points = BestStartPoints(pair_ctx, spec, prefixes, starts, 3);
       CandidateWork trial;
