@@ -345,8 +345,6 @@ bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWo
         return &w;
     return nullptr;
   };
-  const CandidateWork* quantiser_alone =
-      pair.spec.kinds[1] == EffectKind::kOutputQuantization ? single_fit(1, false) : nullptr;
   if (pair.spec.kinds[1] == EffectKind::kOutputQuantization) {
     // Reached from the other effect, with the quantiser as its second: the other effect must
     // also pass as a second after the quantiser alone (its single fit, placed from the lattice),
@@ -355,6 +353,7 @@ bool PruneToSingle(const FitContext& ctx, const CandidateWork& pair, CandidateWo
     // step 0.17 at a noise σ of 0.02 (lattice strength 1.0); from the quantiser no second passed
     // (a cubic spring: LR 8.2 against 11.4), from the cubic spring (LR 18.1 alone against G0) the
     // quantiser passed at LR 1270, and the pair was named.
+    const CandidateWork* quantiser_alone = single_fit(1, false);
     if (!quantiser_alone || !quantiser_alone->fit.eligible) return false;
     const SecondEffectTest test = TestSecondEffect(ctx, *quantiser_alone, pair);
     if (test.Passes(options) && pair.fit.bic < quantiser_alone->fit.bic - options.ambiguity_bic) return false;

@@ -1273,14 +1273,20 @@ TEST(GapPairTest, ADelayRivalledByADampedModeIsStillPairedWithTheLimit) {
   ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.02);
 }
 
-// `idrig gap bench --seed SEED --offsets --combos COMBOS --pairs any` with the rest of `options`,
-// case `index`, whose truth must be `expected_truth`.
-GapCase AnyPairBenchCase(uint64_t seed, int index, double combos, const std::vector<EffectKind>& expected_truth,
-                         GapCaseOptions options) {
-  const std::vector<EffectKind> truth = BenchCaseTruth(index, combos, true);
-  EXPECT_EQ(truth, expected_truth) << "the bench's pair " << index << " moved";
+// `idrig gap bench --seed SEED --offsets --combos COMBOS` (with `--pairs any` where `any_pair`)
+// with the rest of `options`, case `index`, whose truth must be `expected_truth`.
+GapCase OffsetBenchCaseOf(uint64_t seed, int index, double combos, bool any_pair,
+                          const std::vector<EffectKind>& expected_truth, GapCaseOptions options) {
+  const std::vector<EffectKind> truth = BenchCaseTruth(index, combos, any_pair);
+  EXPECT_EQ(truth, expected_truth) << "the bench's case " << index << " moved";
   options.offsets = true;
   return SeededBenchCase(seed, index, truth, options);
+}
+
+// The same with `--pairs any`.
+GapCase AnyPairBenchCase(uint64_t seed, int index, double combos, const std::vector<EffectKind>& expected_truth,
+                         GapCaseOptions options) {
+  return OffsetBenchCaseOf(seed, index, combos, true, expected_truth, options);
 }
 
 // `idrig gap bench --cases 52 --seed 7601 --offsets --combos 0.3 --pairs any --damping 0.02,0.3`,
@@ -1362,11 +1368,8 @@ TEST(GapPairTest, AnInputLimitBesideFrictionIsFoundWhereFrictionAloneRanItsActua
   GapCaseOptions options;
   options.sample_time = 0.002;
   options.samples = 6000;
-  options.offsets = true;
-  const std::vector<EffectKind> truth = BenchCaseTruth(26, 0.3);
-  ASSERT_EQ(truth, (std::vector<EffectKind>{EffectKind::kCoulombFriction, EffectKind::kInputSaturation}))
-      << "the bench's pair 26 moved";
-  const GapCase c = SeededBenchCase(7704, 26, truth, options);
+  const GapCase c = OffsetBenchCaseOf(7704, 26, 0.3, false,
+                                      {EffectKind::kCoulombFriction, EffectKind::kInputSaturation}, options);
   const GapVerdict v = DiagnoseTheTruthAtTheFloor(c, "friction + input limit, Ts 0.002 s");
   ExpectParameterNear(v, EffectKind::kCoulombFriction, 0, c.effects[0].params[0], 0.05);
   ExpectParameterNear(v, EffectKind::kInputSaturation, 1, c.effects[1].params[1], 0.05);
@@ -1382,12 +1385,9 @@ TEST(GapPairTest, ThePairsMainEffectAloneIsTheRankingsFitWhereItsRefitFromThePai
   // Against the clip as the ranking fitted it, the sensor does not pass. (Since stop 51 the only
   // test that takes the backward check's "does not pass as a second effect" route.)
   GapCaseOptions options;
-  options.offsets = true;
   options.plants = "zeros";
   options.noise_pole = 0.9;
-  const std::vector<EffectKind> truth = BenchCaseTruth(20, 0.5);
-  ASSERT_EQ(truth, std::vector<EffectKind>{EffectKind::kOutputSaturation}) << "the bench's case 20 moved";
-  const GapCase c = SeededBenchCase(7706, 20, truth, options);
+  const GapCase c = OffsetBenchCaseOf(7706, 20, 0.5, false, {EffectKind::kOutputSaturation}, options);
   const GapReport report = DiagnoseAndPrint(c, "output clip, zeros, noise pole 0.9");
   EXPECT_EQ(NamedSorted(report.verdict), std::vector<std::string>{"output_saturation"});
   EXPECT_NE(LastNoteWith(report, "does not pass as a second effect after it (LR"), "");
