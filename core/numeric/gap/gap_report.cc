@@ -843,6 +843,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
     constexpr double kRivalBic = 10.0;
     constexpr double kFarAboveFloor = 1.5;
     std::vector<EffectKind> searched_kinds;
+    std::vector<CandidateWork> tied_pairs;  // under a tie: the pair kept from each first
     bool at_floor_only = false;  // searched from the first effect alone (multiple shooting, at the floor)
     for (const CandidateWork& w : work) {
       if (!w.fit.eligible || w.fit.effects.empty()) continue;
@@ -935,6 +936,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
       report.notes.push_back(trial.note);
       ++searched;
       searched_kinds.push_back(w.fit.effects.front().kind);
+      if (trial.kept && tie) tied_pairs.push_back(trial.pair);
       if (trial.kept && (!best.kept || trial.pair.fit.bic < best.pair.fit.bic)) best = std::move(trial);
     }
     // The best pair is also reached from its other effect when that was not a first and the
@@ -954,6 +956,17 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
           break;
         }
     }
+    // Of two pairs, the one with the lower validation BIC, unless the validation records cannot
+    // tell them apart and the estimation records can (the other with no more parameters and a
+    // lower estimation MSE, `swap`). True when `other` is preferred to `current`.
+    const auto PrefersOther = [&](const CandidateWork& current, const CandidateWork& other, bool* swap) {
+      const bool lower = other.fit.bic < current.fit.bic;
+      const CandidateWork& ahead = lower ? other : current;
+      const CandidateWork& behind = lower ? current : other;
+      *swap = behind.fit.parameters <= ahead.fit.parameters && behind.fit.estimation_mse < ahead.fit.estimation_mse &&
+              CompareOnBothRecords(ctx, ahead, behind).estimation_decides;
+      return lower != *swap;
+    };
     // The best pair's first effect a delay, a lag or a resonance: its kin (another of the three)
     // can stand in for it alone, up to a bend of the plant, and rank ahead of it on validation by
     // what the second effect leaves (a delay of two samples beside an output clip on a lightly
@@ -974,13 +987,8 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
         ++searched;
         searched_kinds.push_back(kin);
         if (!trial.kept) continue;
-        const bool lower = trial.pair.fit.bic < best.pair.fit.bic;
-        const CandidateWork& ahead = lower ? trial.pair : best.pair;
-        const CandidateWork& behind = lower ? best.pair : trial.pair;
-        const bool swap = behind.fit.parameters <= ahead.fit.parameters &&
-                          behind.fit.estimation_mse < ahead.fit.estimation_mse &&
-                          CompareOnBothRecords(ctx, ahead, behind).estimation_decides;
-        const bool take = lower != swap;
+        bool swap = false;
+        const bool take = PrefersOther(best.pair, trial.pair, &swap);
         report.notes.push_back(trial.note + " (the kin of the best pair's first effect as the first; " +
                                (take ? "it replaces " : "it does not replace ") +
                                EffectName(best.pair.fit.effects[0].kind) + " with " + EffectName(second) +
@@ -1001,7 +1009,45 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
              ((EffectName(c.effects[0].kind) == v.tied[0] && EffectName(c.effects[1].kind) == v.tied[1]) ||
               (EffectName(c.effects[0].kind) == v.tied[1] && EffectName(c.effects[1].kind) == v.tied[0]));
     };
-    const bool settles = !tie || (best.kept && holds_both(best.pair.fit));
+    // A tie between two effects that each keep the same second effect (a lag and a delay, each
+    // beside the quantiser both need): the two pairs differ only in the tied effect and settle
+    // the tie where the records tell them apart — the validation records significantly, or, where
+    // those cannot, the estimation records (CompareOnBothRecords, with the automatic Newey–West
+    // lag: a quantiser's residual is a train of whole-step flips, whose BIC overstates the
+    // evidence). Otherwise the tie stands.
+    std::string common_note;
+    bool settled_by_common = false;
+    double common_z = 0;  // the z that settled it
+    if (tie && best.kept && !holds_both(best.pair.fit)) {
+      const std::string first = EffectName(best.pair.fit.effects[0].kind);
+      const std::string other_name = first == v.tied[0] ? v.tied[1] : v.tied[0];
+      const bool first_tied = first == v.tied[0] || first == v.tied[1];
+      for (const CandidateWork& p : tied_pairs) {
+        if (!first_tied || EffectName(p.fit.effects[0].kind) != other_name ||
+            p.fit.effects[1].kind != best.pair.fit.effects[1].kind)
+          continue;
+        const EstimationAgainstValidation t = CompareOnBothRecords(ctx, best.pair, p);
+        const bool estimation = p.fit.parameters <= best.pair.fit.parameters &&
+                                p.fit.estimation_mse < best.pair.fit.estimation_mse && t.estimation_decides;
+        char line[400];
+        std::snprintf(line, sizeof line,
+                      "%s and %s each keep %s as the second effect; of the two pairs, %s (validation BIC %.1f "
+                      "against %.1f; %s's gain on validation z = %.2f, %s's on the estimation records z = %.2f, "
+                      "threshold %.2f)",
+                      first.c_str(), other_name.c_str(), EffectName(p.fit.effects[1].kind), 
+                      estimation ? ("the estimation records take " + other_name + "'s").c_str()
+                      : t.z_val > t.threshold ? ("the validation records take " + first + "'s").c_str()
+                                              : "neither record tells them apart",
+                      best.pair.fit.bic, p.fit.bic, first.c_str(), t.z_val, other_name.c_str(), t.z_est, t.threshold);
+        common_note = line;
+        if (estimation) best.pair = p;
+        settled_by_common = estimation || t.z_val > t.threshold;
+        common_z = estimation ? t.z_est : t.z_val;
+        break;
+      }
+    }
+    if (!common_note.empty()) report.notes.push_back(common_note);
+    const bool settles = !tie || (best.kept && (holds_both(best.pair.fit) || settled_by_common));
     const bool pruned = best.kept && settles && PruneToSingle(ctx, best.pair, single, prune_note, &main_second, work);
     if (best.kept && !settles) {
       report.notes.push_back("the tie between " + v.tied[0] + " and " + v.tied[1] + " stands: the best pair, " +
@@ -1041,6 +1087,8 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
         for (const CandidateFit& r : report.ranking)
           if (r.eligible) total += std::exp(-0.5 * (r.bic - c.bic));
         v.confidence = 1.0 / total;
+        // Settled between two pairs by a z test: no surer than that test (Φ(z)).
+        if (settled_by_common) v.confidence = std::min(v.confidence, 0.5 * std::erfc(-common_z / std::sqrt(2.0)));
       }
       v.effect = EffectName(c.effects.front().kind);
       AdoptCandidate(c, v);

@@ -1418,6 +1418,32 @@ TEST(GapPairTest, TwoTiedSinglesAboveTheFloorAreSettledByTheirPair) {
   ExpectParameterNear(v, EffectKind::kCubicStiffness, 0, c.effects[1].params[0], 0.05);
 }
 
+TEST(GapPairTest, TwoTiedSinglesThatKeepTheSameSecondEffectAreSettledByTheirTwoPairs) {
+  // `idrig gap bench --cases 52 --seed 7801 --offsets --combos 0.5 --pairs any --snr 25 --damping
+  // 0.05,0.3`, case 19: a delay of 3.4 samples beside an output quantiser whose step (0.19) is
+  // seven noise sigmas, under a PRBS. Alone, a lag and the delay tie (validation BIC 1.6 apart);
+  // each keeps the quantiser as its second effect (LR ~1000), and the tie stood because neither
+  // pair holds both: `ambiguous`, the quantiser unnamed. The two pairs differ only in the tied
+  // effect. The validation BIC prefers the lag's pair by 22, but the residual is a train of
+  // whole-step flips: with the Newey–West lag the lag's validation gain is z 1.1, the delay's gain
+  // on the estimation records z 3.7 (threshold 2.3). The estimation records settle it.
+  GapCaseOptions options;
+  options.snr_db = 25;
+  options.zeta_min = 0.05;
+  options.zeta_max = 0.3;
+  const GapCase c = AnyPairBenchCase(7801, 19, 0.5, {EffectKind::kTimeDelay, EffectKind::kOutputQuantization},
+                                     options);
+  const GapReport report = DiagnoseAndPrint(c, "delay + quantiser, PRBS, 25 dB");
+  const GapVerdict& v = report.verdict;
+  EXPECT_EQ(NamedSorted(v), (std::vector<std::string>{"output_quantization", "time_delay"}));
+  EXPECT_TRUE(v.tied.empty());
+  EXPECT_NE(LastNoteWith(report, "the estimation records take time_delay's"), "");
+  ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.1);
+  // No surer than the z test that settled it, and not sure at all without it.
+  EXPECT_LT(v.confidence, 1.0);
+  EXPECT_GT(v.confidence, 0.99);
+}
+
 TEST(GapIntegratingTest, APairWhoseFirstEffectRanksLowAloneIsSearchedWhileTheBestIsFarAboveTheFloor) {
   // `--pairs any --integrating --seed 980`, case 28: an input limit beside a backlash of r 0.30.
   // Alone the backlash ranked fifth (its validation worse than a refit: the limit it lacks) and

@@ -114,6 +114,32 @@ TEST(LtiModel, ZohOfAHighOrderModelAtAHighSampleRateIsExact) {
   }
 }
 
+TEST(LtiModel, TransferFunctionOfAHighOrderModelAtAHighSampleRateKeepsItsLeadingTerms) {
+  // The poles above with five zeros (one in the right half plane), unit DC gain: the numerator's
+  // s⁵ coefficient is ~3e5, the denominator's constant ~5e24. The realisation and back must give
+  // every coefficient to its own relative precision; with one rounding scale for all (the
+  // largest coefficient) the s⁵…s³ terms were dropped as noise.
+  using C = std::complex<double>;
+  Eigen::VectorXcd poles(6), zeros(5);
+  poles << C(-5e4, 0), C(-9e3, 0), C(-6e3, 1e4), C(-6e3, -1e4), C(-2.5e3, 9e3), C(-2.5e3, -9e3);
+  zeros << C(-2e4, 0), C(-3e3, 0), C(7e3, 0), C(-4e3, 5e3), C(-4e3, -5e3);
+  const Eigen::VectorXd den = PolynomialFromRoots(poles);
+  const Eigen::VectorXd monic_num = PolynomialFromRoots(zeros);
+  const Eigen::VectorXd num = monic_num * (den(6) / monic_num(5));
+  ASSERT_GT(std::abs(num(0)), 1e4);
+  ASSERT_GT(den(6), 1e24);
+  const TransferFunction back = Normalized(ToTransferFunction(ToStateSpace(TransferFunction{num, den})));
+  ASSERT_EQ(back.num.size(), 6);
+  ASSERT_EQ(back.den.size(), 7);
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(back.num(i) / num(i), 1.0, 1e-7) << "s^" << 5 - i;
+  for (int i = 0; i < 7; ++i) EXPECT_NEAR(back.den(i) / den(i), 1.0, 1e-9) << "s^" << 6 - i;
+  // A numerator whose leading terms are zero stays of the lower degree: unit DC gain, no zeros.
+  const TransferFunction all_pole =
+      Normalized(ToTransferFunction(ToStateSpace(TransferFunction{Eigen::VectorXd::Constant(1, den(6)), den})));
+  ASSERT_EQ(all_pole.num.size(), 1);
+  EXPECT_NEAR(all_pole.num(0) / den(6), 1.0, 1e-9);
+}
+
 TEST(LtiModelBadInput, ClearErrors) {
   TransferFunction improper{Eigen::Vector3d(1, 2, 3), Eigen::Vector2d(1, 1)};
   EXPECT_THROW(Validate(improper), std::invalid_argument);
