@@ -50,7 +50,11 @@ struct SecondEffectTest {
     return PassesEffectRule(options, lr > threshold, signature, gain_z > gain_threshold);
   }
 };
-SecondEffectTest TestSecondEffect(const FitContext& ctx, const CandidateWork& one, const CandidateWork& two) {
+// `chasing_noise`: what `one` leaves on validation does not follow the input (coloured noise or a
+// disturbance), so a second's validation gain, the best of the seconds tried, must clear the
+// level corrected for the effects tried as the LR does.
+SecondEffectTest TestSecondEffect(const FitContext& ctx, const CandidateWork& one, const CandidateWork& two,
+                                  bool chasing_noise = false) {
   const CandidateFit &a = one.fit, &b = two.fit;
   const int dof = std::max(1, b.parameters - a.parameters +
                                   static_cast<int>(std::max<long>(0, b.nuisance_estimation - a.nuisance_estimation)));
@@ -61,7 +65,7 @@ SecondEffectTest TestSecondEffect(const FitContext& ctx, const CandidateWork& on
   const long extra = std::max<long>(0, b.nuisance_validation - a.nuisance_validation);
   t.gain_z = ValidationGainZ(ctx.y_val, one.y_val, two.y_val,
                              NuisanceGainBias(extra, b.validation_mse, ctx.n_val, b.nuisance_validation));
-  t.gain_threshold = NormalUpperQuantile(ctx.options->significance);
+  t.gain_threshold = NormalUpperQuantile(ctx.options->significance / (chasing_noise ? ctx.k_effects : 1));
   return t;
 }
 
@@ -84,12 +88,15 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
   // A resonance as the second effect must act through the input (gap_report.cc): when what the
   // first effect leaves on the validation records does not follow the input, a mode with a free
   // initial state would only reproduce an output disturbance (a hum) through its free response.
+  // What the first leaves not following the input also sets a stricter level for a second that
+  // passes on its validation gain alone (TestSecondEffect).
   std::string input_note;
+  const bool follows_input = ResidualFollowsInput(*ctx.validation, ctx.y_val - first.y_val, &input_note);
   const auto resonance = std::find(seconds.begin(), seconds.end(), EffectKind::kUnmodelledResonance);
-  if (resonance != seconds.end() && !ResidualFollowsInput(*ctx.validation, ctx.y_val - first.y_val, &input_note))
+  if (resonance != seconds.end() && !follows_input)
     seconds.erase(resonance);
   else
-    input_note.clear();
+    input_note.clear();  // set only when the resonance was taken out
   if (seconds.empty()) return out;
   const Candidate base(*ctx.g0, first.spec, ctx.scales, ctx.options->substeps);
   // A lighter polish than a single effect's (the first effect is already in place): the pair
@@ -194,7 +201,9 @@ PairSearch SearchSecondEffect(const FitContext& ctx, const CandidateWork& first,
     c.validation_mse = ValidationMse(ctx, w.y_val);
     c.nrmse_after = Nrmse(ctx.y_val, w.y_val)(0);
     c.bic = ValidationBic(ctx.n_val, ctx.n_est, c.validation_mse, c.parameters, c.nuisance_validation);
-    const SecondEffectTest test = TestSecondEffect(ctx, first, w);
+    // A delay, a lag or a mode after a first that bends or folds the output is what the linear
+    // input-residual test reads as noise (the resonance's late entry below): the plain level.
+    const SecondEffectTest test = TestSecondEffect(ctx, first, w, !follows_input && !IsLinearEffect(c.effects[1].kind));
     c.likelihood_ratio = test.lr;
     c.lr_threshold = test.threshold;
     c.significant = c.likelihood_ratio > c.lr_threshold;

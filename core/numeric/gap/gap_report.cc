@@ -956,17 +956,6 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
           break;
         }
     }
-    // Of two pairs, the one with the lower validation BIC, unless the validation records cannot
-    // tell them apart and the estimation records can (the other with no more parameters and a
-    // lower estimation MSE, `swap`). True when `other` is preferred to `current`.
-    const auto PrefersOther = [&](const CandidateWork& current, const CandidateWork& other, bool* swap) {
-      const bool lower = other.fit.bic < current.fit.bic;
-      const CandidateWork& ahead = lower ? other : current;
-      const CandidateWork& behind = lower ? current : other;
-      *swap = behind.fit.parameters <= ahead.fit.parameters && behind.fit.estimation_mse < ahead.fit.estimation_mse &&
-              CompareOnBothRecords(ctx, ahead, behind).estimation_decides;
-      return lower != *swap;
-    };
     // The best pair's first effect a delay, a lag or a resonance: its kin (another of the three)
     // can stand in for it alone, up to a bend of the plant, and rank ahead of it on validation by
     // what the second effect leaves (a delay of two samples beside an output clip on a lightly
@@ -987,8 +976,13 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
         ++searched;
         searched_kinds.push_back(kin);
         if (!trial.kept) continue;
-        bool swap = false;
-        const bool take = PrefersOther(best.pair, trial.pair, &swap);
+        const bool lower = trial.pair.fit.bic < best.pair.fit.bic;
+        const CandidateWork& ahead = lower ? trial.pair : best.pair;
+        const CandidateWork& behind = lower ? best.pair : trial.pair;
+        const bool swap = behind.fit.parameters <= ahead.fit.parameters &&
+                          behind.fit.estimation_mse < ahead.fit.estimation_mse &&
+                          CompareOnBothRecords(ctx, ahead, behind).estimation_decides;
+        const bool take = lower != swap;
         report.notes.push_back(trial.note + " (the kin of the best pair's first effect as the first; " +
                                (take ? "it replaces " : "it does not replace ") +
                                EffectName(best.pair.fit.effects[0].kind) + " with " + EffectName(second) +
@@ -1034,7 +1028,7 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
                       "%s and %s each keep %s as the second effect; of the two pairs, %s (validation BIC %.1f "
                       "against %.1f; %s's gain on validation z = %.2f, %s's on the estimation records z = %.2f, "
                       "threshold %.2f)",
-                      first.c_str(), other_name.c_str(), EffectName(p.fit.effects[1].kind), 
+                      first.c_str(), other_name.c_str(), EffectName(p.fit.effects[1].kind),
                       estimation ? ("the estimation records take " + other_name + "'s").c_str()
                       : t.z_val > t.threshold ? ("the validation records take " + first + "'s").c_str()
                                               : "neither record tells them apart",
@@ -1232,6 +1226,24 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
     v.nuisance.initial_state += "; the backlash's play starts where it was left before each record (the best of a "
                                 "grid across its band around the first command, Candidate::PlayStates)";
 
+  // An actuator offset that the records do not pin down is reported as fitted, and said to be
+  // so: its 1σ beyond the span of the input, where another parameter (a dead zone's edges, the
+  // output offset through a near-linear plant) takes up what it does (DaISy exchanger, cubic
+  // spring with a dead zone: du −0.06 ± 99 on an input that spans 0.6).
+  if (v.nuisance.input_offset_fitted && v.nuisance.input_offset_std > 0) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (const GapRecord& r : estimation)
+      if (r.u.size() > 0) lo = std::min(lo, r.u.minCoeff()), hi = std::max(hi, r.u.maxCoeff());
+    if (hi > lo && !(v.nuisance.input_offset_std <= hi - lo)) {
+      char line[400];
+      std::snprintf(line, sizeof line,
+                    "the actuator offset is not determined by these records: du = %.4g ± %.4g, its 1σ more than "
+                    "the input's span on the estimation records (%.4g); another parameter of the model takes up "
+                    "what it does, and verdict.nuisance.input_offset is no operating point to rely on",
+                    v.nuisance.input_offset, v.nuisance.input_offset_std, hi - lo);
+      report.notes.push_back(line);
+    }
+  }
   report.where = LocateGap(g0, validation, floor.sigma);
   report.where.noise_nrmse = noise_nrmse;
   report.where.noise_floor = floor;
