@@ -229,8 +229,8 @@ TransferFunction ToTransferFunction(const StateSpace& ss, int output, int input)
   tf.num = PolynomialFromRoots(closed_poles) - den + d * den;
   tf.den = den;
   // Drop leading numerator terms that are rounding noise: each against the size of the terms it
-  // is the difference of (a single scale for all, the largest coefficient, took the s⁵…s³ terms
-  // of a sixth-order model at 51.2 kHz, ~1e5 against ~1e25, for noise).
+  // is the difference of (a single scale for all, the largest coefficient, took the s⁵ term of a
+  // sixth-order model at 51.2 kHz, ~3e5 against ~5e24, for noise).
   const Eigen::VectorXd scale = CoefficientScale(poles) * (1.0 + std::abs(d)) + CoefficientScale(closed_poles);
   int first = 0;
   while (first < n && std::abs(tf.num(first)) < 1e-13 * std::max(1.0, scale(first))) ++first;

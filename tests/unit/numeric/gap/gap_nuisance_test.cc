@@ -1439,7 +1439,7 @@ TEST(GapPairTest, TwoTiedSinglesThatKeepTheSameSecondEffectAreSettledByTheirTwoP
   EXPECT_TRUE(v.tied.empty());
   EXPECT_NE(LastNoteWith(report, "the estimation records take time_delay's"), "");
   ExpectParameterNear(v, EffectKind::kTimeDelay, 0, c.effects[0].params[0], 0.1);
-  // No surer than the z test that settled it, and not sure at all without it.
+  // No surer than the z test that settled it (Φ(3.7)).
   EXPECT_LT(v.confidence, 1.0);
   EXPECT_GT(v.confidence, 0.99);
 }

@@ -118,7 +118,7 @@ TEST(LtiModel, TransferFunctionOfAHighOrderModelAtAHighSampleRateKeepsItsLeading
   // The poles above with five zeros (one in the right half plane), unit DC gain: the numerator's
   // s⁵ coefficient is ~3e5, the denominator's constant ~5e24. The realisation and back must give
   // every coefficient to its own relative precision; with one rounding scale for all (the
-  // largest coefficient) the s⁵…s³ terms were dropped as noise.
+  // largest coefficient) the s⁵ term was dropped as noise.
   using C = std::complex<double>;
   Eigen::VectorXcd poles(6), zeros(5);
   poles << C(-5e4, 0), C(-9e3, 0), C(-6e3, 1e4), C(-6e3, -1e4), C(-2.5e3, 9e3), C(-2.5e3, -9e3);
