@@ -1009,16 +1009,13 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
     // those cannot, the estimation records (CompareOnBothRecords, with the automatic Newey–West
     // lag: a quantiser's residual is a train of whole-step flips, whose BIC overstates the
     // evidence). Otherwise the tie stands.
-    std::string common_note;
     bool settled_by_common = false;
     double common_z = 0;  // the z that settled it
-    if (tie && best.kept && !holds_both(best.pair.fit)) {
-      const std::string first = EffectName(best.pair.fit.effects[0].kind);
+    const std::string first = best.kept ? EffectName(best.pair.fit.effects[0].kind) : "";
+    if (tie && best.kept && !holds_both(best.pair.fit) && (first == v.tied[0] || first == v.tied[1])) {
       const std::string other_name = first == v.tied[0] ? v.tied[1] : v.tied[0];
-      const bool first_tied = first == v.tied[0] || first == v.tied[1];
       for (const CandidateWork& p : tied_pairs) {
-        if (!first_tied || EffectName(p.fit.effects[0].kind) != other_name ||
-            p.fit.effects[1].kind != best.pair.fit.effects[1].kind)
+        if (EffectName(p.fit.effects[0].kind) != other_name || p.fit.effects[1].kind != best.pair.fit.effects[1].kind)
           continue;
         const EstimationAgainstValidation t = CompareOnBothRecords(ctx, best.pair, p);
         const bool estimation = p.fit.parameters <= best.pair.fit.parameters &&
@@ -1033,14 +1030,13 @@ GapReport DiagnoseGapOnce(const TransferFunction& sim_model, std::vector<GapReco
                       : t.z_val > t.threshold ? ("the validation records take " + first + "'s").c_str()
                                               : "neither record tells them apart",
                       best.pair.fit.bic, p.fit.bic, first.c_str(), t.z_val, other_name.c_str(), t.z_est, t.threshold);
-        common_note = line;
+        report.notes.push_back(line);
         if (estimation) best.pair = p;
         settled_by_common = estimation || t.z_val > t.threshold;
         common_z = estimation ? t.z_est : t.z_val;
         break;
       }
     }
-    if (!common_note.empty()) report.notes.push_back(common_note);
     const bool settles = !tie || (best.kept && (holds_both(best.pair.fit) || settled_by_common));
     const bool pruned = best.kept && settles && PruneToSingle(ctx, best.pair, single, prune_note, &main_second, work);
     if (best.kept && !settles) {

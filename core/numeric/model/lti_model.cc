@@ -57,6 +57,11 @@ Eigen::MatrixXd BalancedExp(const Eigen::MatrixXd& m) {
   return d.asDiagonal() * b.exp() * d.cwiseInverse().asDiagonal();
 }
 
+// M's eigenvalues, from the balanced matrix.
+Eigen::VectorXcd BalancedEigenvalues(const Eigen::MatrixXd& m) {
+  return Eigen::EigenSolver<Eigen::MatrixXd>(Balanced(m, nullptr), false).eigenvalues();
+}
+
 // The coefficients (descending) of Π(s + |λ_i|): the i-th is the sum of the products of i of the
 // |λ|, an upper bound on the i-th coefficient of the polynomial with roots λ and the size of the
 // rounding it carries when computed from them.
@@ -221,10 +226,8 @@ TransferFunction ToTransferFunction(const StateSpace& ss, int output, int input)
   // Both sets of eigenvalues from balanced matrices: at a high sample rate the realisation's
   // entries span 25 orders of magnitude, and without balancing the leading coefficients, of the
   // order of ω, drown in the rounding of the largest, of the order of ωⁿ.
-  const Eigen::VectorXcd poles =
-      Eigen::EigenSolver<Eigen::MatrixXd>(Balanced(ss.A, nullptr), false).eigenvalues();
-  const Eigen::VectorXcd closed_poles =
-      Eigen::EigenSolver<Eigen::MatrixXd>(Balanced(ss.A - b * c, nullptr), false).eigenvalues();
+  const Eigen::VectorXcd poles = BalancedEigenvalues(ss.A);
+  const Eigen::VectorXcd closed_poles = BalancedEigenvalues(ss.A - b * c);
   const Eigen::VectorXd den = PolynomialFromRoots(poles);
   tf.num = PolynomialFromRoots(closed_poles) - den + d * den;
   tf.den = den;
